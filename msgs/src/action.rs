@@ -1,0 +1,98 @@
+//! Parts of the `cell_msgs/action/*` actions (goal, result, feedback), mirroring
+//! `msgs/action/*.action` section by section.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{MachineProgram, Toolpath};
+
+/// Goal of `PlanHotwire`: plan a hot-wire cut of a (possibly tapered) wing panel (Swarm-Cut
+/// exposure-optimised trajectory with the kerf model).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct PlanHotwireGoal {
+    /// Job identifier, carried into the Toolpath.
+    pub job_id: String,
+    /// Root airfoil: a name under config/airfoils (e.g. "s1223") or a path to a UIUC .dat file.
+    pub root_airfoil: String,
+    /// Tip airfoil; empty means the same as the root.
+    pub tip_airfoil: String,
+    /// Root chord \[mm\].
+    pub root_chord_mm: f64,
+    /// Tip chord \[mm\]; 0 means the same as the root.
+    pub tip_chord_mm: f64,
+    /// Tip twist about the pivot \[deg\], positive nose up.
+    pub tip_twist_deg: f64,
+    /// Leading-edge sweep of the tip relative to the root \[mm\].
+    pub tip_sweep_mm: f64,
+    /// Panel span between root and tip \[mm\].
+    pub span_mm: f64,
+    /// Material name from the material library (e.g. "EPS", "XPS", "EPP").
+    pub material: String,
+    /// Critical specific energy target (normalised exposure units); 0 = material default.
+    pub cse: f64,
+    /// Machine profile under config/machines.
+    pub machine_profile: String,
+    /// PSO iterations; 0 = the paper's default (8000).
+    pub iterations: u32,
+    /// RNG seed; the same seed gives the same toolpath.
+    pub seed: u64,
+}
+
+/// Result of `PlanHotwire`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct PlanHotwireResult {
+    /// Whether planning succeeded.
+    pub success: bool,
+    /// Why it failed, or a one-line summary on success.
+    pub message: String,
+    /// The planned toolpath.
+    pub toolpath: Toolpath,
+    /// Mean squared exposure error of the optimised path.
+    pub final_loss: f64,
+    /// Mean squared exposure error of the fixed-offset baseline.
+    pub baseline_loss: f64,
+}
+
+/// Feedback of `PlanHotwire`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct PlanHotwireFeedback {
+    /// Current optimiser iteration.
+    pub iteration: u32,
+    /// Iterations planned in total.
+    pub total_iterations: u32,
+    /// Best loss so far.
+    pub best_loss: f64,
+    /// Estimated time to completion \[s\].
+    pub eta_s: f64,
+}
+
+/// Goal of `ExecuteProgram`: stream a machine program to a controller and follow it to
+/// completion.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct ExecuteProgramGoal {
+    /// The program to run.
+    pub program: MachineProgram,
+    /// Target machine (machine profile name); empty = the bridge's default machine.
+    pub machine_id: String,
+}
+
+/// Result of `ExecuteProgram`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct ExecuteProgramResult {
+    /// Whether the program ran to completion.
+    pub success: bool,
+    /// Why it failed, or a summary on success.
+    pub message: String,
+    /// Final controller state (one of `MachineStatus::STATE_*`).
+    pub final_state: u8,
+}
+
+/// Feedback of `ExecuteProgram`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct ExecuteProgramFeedback {
+    /// Last program line the controller acknowledged.
+    pub acked_line: u32,
+    /// Lines in the program.
+    pub total_lines: u32,
+    /// Controller state (one of `MachineStatus::STATE_*`).
+    pub state: u8,
+}

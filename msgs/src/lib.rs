@@ -1,0 +1,149 @@
+//! cellsuite message, service and action types.
+//!
+//! The `.msg`/`.action` files under `msgs/` are the single source of truth. This crate embeds
+//! them ([`registry`]), parses them ([`idl`]), provides matching serde types (this module and
+//! [`builtin_interfaces`], [`std_msgs`], [`geometry_msgs`]), writes and reads ROS 2 CDR
+//! ([`to_cdr`], [`from_cdr`]) and decodes CDR from the definitions alone ([`dynamic`]). The
+//! drift test (`tests/drift.rs`) checks every Rust type against its definition.
+//!
+//! Action parts are plain messages named like rosidl does: `cell_msgs/action/PlanHotwire_Goal`
+//! is [`PlanHotwireGoal`].
+
+pub mod builtin_interfaces;
+pub mod cdr;
+pub mod dynamic;
+pub mod geometry_msgs;
+pub mod idl;
+pub mod registry;
+pub mod std_msgs;
+
+mod action;
+mod msg;
+
+pub use action::{
+    ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, PlanHotwireFeedback,
+    PlanHotwireGoal, PlanHotwireResult,
+};
+pub use cdr::{from_cdr, to_cdr, CdrError};
+pub use msg::{
+    HeatMap, HeatMapSizeError, MachineProgram, MachineStatus, ProgramFile, Toolpath,
+    ToolpathSegment,
+};
+
+/// A Rust type that mirrors a registered ROS 2 message definition.
+pub trait RosMessage:
+    serde::Serialize + serde::de::DeserializeOwned + Clone + std::fmt::Debug + Send + Sync + 'static
+{
+    /// ROS 2 name, e.g. `cell_msgs/msg/Toolpath` or `cell_msgs/action/PlanHotwire_Goal`.
+    const ROS_NAME: &'static str;
+
+    /// Package, e.g. `cell_msgs`.
+    fn package() -> &'static str {
+        name_parts(Self::ROS_NAME).0
+    }
+
+    /// Interface kind: `msg`, `srv` or `action`.
+    fn interface_kind() -> &'static str {
+        name_parts(Self::ROS_NAME).1
+    }
+
+    /// Type name within the package, e.g. `Toolpath` or `PlanHotwire_Goal`.
+    fn type_name() -> &'static str {
+        name_parts(Self::ROS_NAME).2
+    }
+
+    /// DDS type name as rosidl generates it, e.g. `cell_msgs::msg::dds_::Toolpath_`.
+    fn dds_type_name() -> String {
+        let (package, kind, name) = name_parts(Self::ROS_NAME);
+        format!("{package}::{kind}::dds_::{name}_")
+    }
+
+    /// The rosbag2 `ros2msg` complete definition, see [`registry::full_definition`].
+    ///
+    /// # Panics
+    /// If `ROS_NAME` is not registered or its files do not parse. Never for this crate's types:
+    /// the definitions are embedded and the drift test resolves every one.
+    fn full_definition() -> String {
+        match registry::full_definition(Self::ROS_NAME) {
+            Ok(text) => text,
+            Err(e) => panic!("embedded definition of {}: {e}", Self::ROS_NAME),
+        }
+    }
+}
+
+/// Splits `pkg/kind/Type` into its three parts (a malformed name yields empty leading parts).
+fn name_parts(ros_name: &'static str) -> (&'static str, &'static str, &'static str) {
+    let mut parts = ros_name.rsplitn(3, '/');
+    let name = parts.next().unwrap_or_default();
+    let kind = parts.next().unwrap_or_default();
+    (parts.next().unwrap_or_default(), kind, name)
+}
+
+/// Calls `$callback!(Type => "ros/name", ...)` with every Rust message type of this crate.
+/// This is the one list to extend when adding a type: it implements [`RosMessage`] and puts the
+/// type under the drift test.
+#[macro_export]
+macro_rules! for_each_message {
+    ($callback:ident) => {
+        $callback! {
+            $crate::builtin_interfaces::Time => "builtin_interfaces/msg/Time",
+            $crate::std_msgs::Header => "std_msgs/msg/Header",
+            $crate::std_msgs::StringMsg => "std_msgs/msg/String",
+            $crate::geometry_msgs::Point => "geometry_msgs/msg/Point",
+            $crate::geometry_msgs::Vector3 => "geometry_msgs/msg/Vector3",
+            $crate::geometry_msgs::Quaternion => "geometry_msgs/msg/Quaternion",
+            $crate::geometry_msgs::Pose => "geometry_msgs/msg/Pose",
+            $crate::Toolpath => "cell_msgs/msg/Toolpath",
+            $crate::ToolpathSegment => "cell_msgs/msg/ToolpathSegment",
+            $crate::HeatMap => "cell_msgs/msg/HeatMap",
+            $crate::ProgramFile => "cell_msgs/msg/ProgramFile",
+            $crate::MachineProgram => "cell_msgs/msg/MachineProgram",
+            $crate::MachineStatus => "cell_msgs/msg/MachineStatus",
+            $crate::PlanHotwireGoal => "cell_msgs/action/PlanHotwire_Goal",
+            $crate::PlanHotwireResult => "cell_msgs/action/PlanHotwire_Result",
+            $crate::PlanHotwireFeedback => "cell_msgs/action/PlanHotwire_Feedback",
+            $crate::ExecuteProgramGoal => "cell_msgs/action/ExecuteProgram_Goal",
+            $crate::ExecuteProgramResult => "cell_msgs/action/ExecuteProgram_Result",
+            $crate::ExecuteProgramFeedback => "cell_msgs/action/ExecuteProgram_Feedback",
+        }
+    };
+}
+
+macro_rules! impl_ros_message {
+    ($($ty:ty => $name:literal),* $(,)?) => {
+        $(impl RosMessage for $ty {
+            const ROS_NAME: &'static str = $name;
+        })*
+    };
+}
+for_each_message!(impl_ros_message);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_derived_from_ros_name() {
+        assert_eq!(Toolpath::dds_type_name(), "cell_msgs::msg::dds_::Toolpath_");
+        assert_eq!(
+            PlanHotwireGoal::dds_type_name(),
+            "cell_msgs::action::dds_::PlanHotwire_Goal_"
+        );
+        assert_eq!(
+            std_msgs::Header::dds_type_name(),
+            "std_msgs::msg::dds_::Header_"
+        );
+        assert_eq!(
+            (
+                ExecuteProgramFeedback::package(),
+                ExecuteProgramFeedback::interface_kind()
+            ),
+            ("cell_msgs", "action")
+        );
+        assert_eq!(
+            ExecuteProgramFeedback::type_name(),
+            "ExecuteProgram_Feedback"
+        );
+        assert_eq!(name_parts("bad"), ("", "", "bad"));
+    }
+}

@@ -1,0 +1,241 @@
+//! `cell_msgs/msg/*` types, mirroring `msgs/msg/*.msg` field by field.
+
+use serde::{Deserialize, Serialize};
+
+use crate::geometry_msgs::{Point, Vector3};
+use crate::std_msgs::Header;
+
+/// A planned toolpath for one job: what the planner, sequencer and slicer publish and what the
+/// emitter turns into a [`MachineProgram`]. Units: millimetres.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct Toolpath {
+    /// Frame and time of the path.
+    pub header: Header,
+    /// Job this toolpath belongs to; carried through to the MachineProgram.
+    pub job_id: String,
+    /// Which cell process this path is for (one of `PROCESS_*`).
+    pub process: u8,
+    /// Unit of every segment's `power` values (one of `POWER_*`).
+    pub power_unit: u8,
+    /// Distance between the primary and secondary planes \[mm\] (hot-wire tower separation);
+    /// 0 if unused.
+    pub plane_separation_mm: f64,
+    /// The path's continuous runs, in order.
+    pub segments: Vec<ToolpathSegment>,
+}
+
+impl Toolpath {
+    /// Process: hot-wire foam cutting.
+    pub const PROCESS_HOTWIRE: u8 = 0;
+    /// Process: sheet cutting (laser, plasma, ...).
+    pub const PROCESS_SHEET_CUT: u8 = 1;
+    /// Process: wire-arc additive manufacturing.
+    pub const PROCESS_WAAM: u8 = 2;
+    /// Process: extrusion printing.
+    pub const PROCESS_EXTRUSION: u8 = 3;
+    /// Power unit: no power values.
+    pub const POWER_NONE: u8 = 0;
+    /// Power unit: hot-wire current \[A\].
+    pub const POWER_WIRE_CURRENT_A: u8 = 1;
+    /// Power unit: laser power \[%\].
+    pub const POWER_LASER_PERCENT: u8 = 2;
+    /// Power unit: arc on (1) / off (0).
+    pub const POWER_ARC_ON: u8 = 3;
+    /// Power unit: extrusion rate \[mm³/s\].
+    pub const POWER_EXTRUSION_MM3_S: u8 = 4;
+}
+
+/// One continuous run of a toolpath: the tool moves through `points` in order. Units:
+/// millimetres, millimetres per second. Frame: the parent Toolpath's `header.frame_id`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct ToolpathSegment {
+    /// What the tool does along this segment (one of `KIND_*`).
+    pub kind: u8,
+    /// Layer index for layered processes (WAAM, extrusion); 0 otherwise.
+    pub layer: u32,
+    /// Primary-plane points: hot-wire root / XY carriage, laser or torch tip, nozzle tip.
+    pub points: Vec<Point>,
+    /// Secondary-plane points, empty or one per primary point: hot-wire tip / UV carriage.
+    pub secondary_points: Vec<Point>,
+    /// Tool axis direction per point, empty or one per point (robot orientation for WAAM and
+    /// RAPID).
+    pub normals: Vec<Vector3>,
+    /// Feed along the path at each point \[mm/s\], one per point.
+    pub feed_mm_s: Vec<f32>,
+    /// Process power at each point, one per point, in the parent Toolpath's `power_unit`.
+    pub power: Vec<f32>,
+    /// WAAM bead width per point \[mm\]; empty for other processes.
+    pub bead_width_mm: Vec<f32>,
+    /// WAAM bead height per point \[mm\]; empty for other processes.
+    pub bead_height_mm: Vec<f32>,
+}
+
+impl ToolpathSegment {
+    /// The tool cuts along the segment.
+    pub const KIND_CUT: u8 = 0;
+    /// Rapid move with the tool inactive.
+    pub const KIND_TRAVEL: u8 = 1;
+    /// The tool deposits material (WAAM, extrusion).
+    pub const KIND_DEPOSIT: u8 = 2;
+    /// Lead-in or lead-out move.
+    pub const KIND_LEAD: u8 = 3;
+}
+
+/// A scalar raster: sheet temperature, wire/surface exposure matrix, or a 1-row exposure
+/// profile along a foil. Row-major, `height` rows of `width` cells.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct HeatMap {
+    /// Frame and time of the raster.
+    pub header: Header,
+    /// What the raster shows, e.g. "sheet_temperature", "wire_exposure", "exposure_profile".
+    pub quantity: String,
+    /// Unit of `data` and `threshold`, e.g. "K", "J/mm^2", "1" for normalised values.
+    pub unit: String,
+    /// Number of columns.
+    pub width: u32,
+    /// Number of rows.
+    pub height: u32,
+    /// Cell pitch along columns (x) \[mm\]; 1 for index-space rasters.
+    pub cell_width_mm: f64,
+    /// Cell pitch along rows (y) \[mm\]; 1 for index-space rasters.
+    pub cell_height_mm: f64,
+    /// Position of the centre of cell (row 0, column 0) in `header.frame_id` \[mm\].
+    pub origin: Point,
+    /// Value of interest (overheat temperature, critical specific energy); NaN when none.
+    pub threshold: f32,
+    /// `height * width` values, row-major.
+    pub data: Vec<f32>,
+}
+
+/// `HeatMap::new` got data whose length is not `width * height`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("heat map of {width}x{height} cells needs {} values, got {len}", u64::from(*.width) * u64::from(*.height))]
+pub struct HeatMapSizeError {
+    /// Requested width.
+    pub width: u32,
+    /// Requested height.
+    pub height: u32,
+    /// Length of the data given.
+    pub len: usize,
+}
+
+impl HeatMap {
+    /// An index-space raster (1 mm cells at the origin, no threshold) after checking
+    /// `data.len() == width * height`.
+    pub fn new(
+        quantity: impl Into<String>,
+        unit: impl Into<String>,
+        width: u32,
+        height: u32,
+        data: Vec<f32>,
+    ) -> Result<Self, HeatMapSizeError> {
+        if u64::from(width) * u64::from(height) != data.len() as u64 {
+            return Err(HeatMapSizeError {
+                width,
+                height,
+                len: data.len(),
+            });
+        }
+        Ok(Self {
+            quantity: quantity.into(),
+            unit: unit.into(),
+            width,
+            height,
+            cell_width_mm: 1.0,
+            cell_height_mm: 1.0,
+            threshold: f32::NAN,
+            data,
+            ..Default::default()
+        })
+    }
+}
+
+/// One file of a machine program: a G-code file, a RAPID module (.mod) or a program file (.pgf).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct ProgramFile {
+    /// File name without directories, e.g. "job42.ngc", "MainModule.mod".
+    pub name: String,
+    /// File contents.
+    pub text: String,
+}
+
+/// A complete program for one machine, produced by the emitter and streamed by machine_bridge.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct MachineProgram {
+    /// Time of emission.
+    pub header: Header,
+    /// Job the program was emitted for.
+    pub job_id: String,
+    /// Output dialect: "grbl", "linuxcnc", "mach3", "marlin" or "abb_rapid".
+    pub dialect: String,
+    /// Machine profile (a name under config/machines) the program was emitted for.
+    pub machine_profile: String,
+    /// Program files; the first one is the entry point (the G-code file, or the RAPID main
+    /// module).
+    pub files: Vec<ProgramFile>,
+    /// Total number of lines over all files.
+    pub line_count: u32,
+    /// Lower-case hex SHA-256 over the files' texts, concatenated in order.
+    pub sha256: String,
+}
+
+/// State of one machine controller as seen by machine_bridge.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct MachineStatus {
+    /// Time of the observation.
+    pub header: Header,
+    /// Which machine this is (machine profile name or controller address).
+    pub machine_id: String,
+    /// One of `STATE_*`.
+    pub state: u8,
+    /// Job being executed; empty when idle.
+    pub job_id: String,
+    /// Last program line the controller acknowledged, 1-based; 0 before the first.
+    pub acked_line: u32,
+    /// Lines in the program being executed.
+    pub total_lines: u32,
+    /// Axis names, e.g. X Y U V, in the order of `axis_positions`.
+    pub axis_names: Vec<String>,
+    /// Machine positions \[mm or deg\], one per axis name.
+    pub axis_positions: Vec<f64>,
+    /// Fill of the controller's receive or planner buffer, 0..1.
+    pub buffer_fill: f32,
+    /// Current feed \[mm/s\].
+    pub feed_mm_s: f32,
+    /// Alarm or error text from the controller; empty when none.
+    pub alarm: String,
+}
+
+impl MachineStatus {
+    /// State not known yet.
+    pub const STATE_UNKNOWN: u8 = 0;
+    /// No connection to the controller.
+    pub const STATE_DISCONNECTED: u8 = 1;
+    /// Connected and idle.
+    pub const STATE_IDLE: u8 = 2;
+    /// Executing a program.
+    pub const STATE_RUNNING: u8 = 3;
+    /// Feed hold.
+    pub const STATE_HOLD: u8 = 4;
+    /// In alarm; see `alarm`.
+    pub const STATE_ALARM: u8 = 5;
+    /// Finished the program.
+    pub const STATE_DONE: u8 = 6;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heat_map_new_checks_size() {
+        let map = HeatMap::new("sheet_temperature", "K", 3, 2, vec![0.0; 6]).expect("6 = 3 x 2");
+        assert_eq!((map.width, map.height, map.cell_width_mm), (3, 2, 1.0));
+        assert!(map.threshold.is_nan());
+        let err = HeatMap::new("t", "K", 3, 2, vec![0.0; 5]).expect_err("5 != 6");
+        assert_eq!(
+            err.to_string(),
+            "heat map of 3x2 cells needs 6 values, got 5"
+        );
+    }
+}

@@ -1,0 +1,177 @@
+//! The `cell` command.
+//!
+//! - `cell launch FILE [NAME:=VALUE …]` starts the nodes of a ROS 2 YAML launch file and
+//!   supervises them (see [`cell_launch`]).
+//! - `cell demo` runs the demo cell from `launch_scripts/demo.launch.yaml` (embedded in the
+//!   binary, so it works from any directory).
+//! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
+//!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
+
+use std::{path::PathBuf, process::ExitCode};
+
+use cell_launch::{default_resolver, supervise, LaunchFile, Program, StopOthersWhen, SupervisorOptions};
+use clap::{Parser, Subcommand};
+
+/// The demo cell's launch file, as shipped in `launch_scripts/`.
+pub const DEMO_LAUNCH: &str = include_str!("../../../launch_scripts/demo.launch.yaml");
+
+/// A node `cell` can run itself: its exec name and its `main`.
+type BuiltinMain = fn(Vec<String>) -> ExitCode;
+
+/// Nodes built into `cell`, by the exec name launch files use.
+pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
+    ("cell_probe", cell_probe::main),
+    ("monitor", cell_monitor::main),
+];
+
+#[derive(Parser, Debug)]
+#[command(name = "cell", version, about = "cellsuite: plan, program, stream and watch a thermal manufacturing cell")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Start the nodes of a ROS 2 YAML launch file and supervise them.
+    Launch {
+        /// The launch file (`launch: - node: {pkg, exec, name, namespace, param, remap}`).
+        file: PathBuf,
+        /// Launch arguments, `NAME:=VALUE`, overriding the file's `arg` defaults.
+        #[arg(value_name = "NAME:=VALUE")]
+        args: Vec<String>,
+    },
+    /// Run the demo cell: a probe publishes a Toolpath and HeatMaps, a monitor receives them.
+    Demo {
+        /// Rerun output for every node: `off`, `save:DIR` (one .rrd per node) or `connect:HOST:PORT`.
+        #[arg(long, default_value = "off")]
+        rerun: String,
+        /// Use this launch file instead of the built-in demo.
+        #[arg(long)]
+        file: Option<PathBuf>,
+        /// Further launch arguments, `NAME:=VALUE`.
+        #[arg(value_name = "NAME:=VALUE")]
+        args: Vec<String>,
+    },
+    /// Run a node built into `cell` (as launch files do when no separate binary is installed).
+    Node {
+        /// The node's exec name.
+        exec: String,
+        /// The node's arguments, `--ros-args …` included.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+}
+
+/// Finds a launch file's exec: a node built into this binary first (always the same build as
+/// `cell` itself), then a program beside `cell` or on `$PATH`.
+pub fn resolve_exec(pkg: &str, exec: &str) -> Option<Program> {
+    if BUILTIN_NODES.iter().any(|(name, _)| *name == exec) {
+        if let Ok(me) = std::env::current_exe() {
+            return Some(Program {
+                program: me,
+                leading_args: vec!["node".into(), exec.into()],
+            });
+        }
+    }
+    default_resolver(pkg, exec)
+}
+
+/// Runs `cell` with `argv` (program name included) and returns its exit status.
+pub fn main(argv: Vec<String>) -> ExitCode {
+    let cli = match Cli::try_parse_from(argv) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { ExitCode::from(cell_runtime::EXIT_USAGE) } else { ExitCode::SUCCESS };
+        }
+    };
+    match cli.command {
+        Command::Node { exec, args } => match BUILTIN_NODES.iter().find(|(name, _)| *name == exec) {
+            Some((_, node_main)) => node_main(args),
+            None => {
+                let known: Vec<_> = BUILTIN_NODES.iter().map(|(n, _)| *n).collect();
+                eprintln!("error: cell node: no built-in node {exec:?} (built in: {})", known.join(", "));
+                ExitCode::from(cell_runtime::EXIT_USAGE)
+            }
+        },
+        Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
+        Command::Demo { rerun, file, mut args } => {
+            let rerun = match rerun.split_once(':') {
+                Some(("save", dir)) => format!("save:{}", PathBuf::from(dir).join("{node}.rrd").display()),
+                _ => rerun,
+            };
+            args.insert(0, format!("rerun:={rerun}"));
+            let source = match file {
+                Some(path) => LaunchSource::File(path),
+                None => LaunchSource::Embedded,
+            };
+            run_launch(source, args, Some(StopOthersWhen::Node("monitor".into())))
+        }
+    }
+}
+
+enum LaunchSource {
+    File(PathBuf),
+    Embedded,
+}
+
+fn run_launch(source: LaunchSource, args: Vec<String>, stop: Option<StopOthersWhen>) -> ExitCode {
+    cell_runtime::logging::init(None);
+    let fail = |e: &dyn std::fmt::Display| {
+        eprintln!("error: {e}");
+        ExitCode::from(cell_runtime::EXIT_USAGE)
+    };
+    let mut pairs = Vec::new();
+    for a in &args {
+        match cell_launch::parse_launch_arg(a) {
+            Ok(pair) => pairs.push(pair),
+            Err(e) => return fail(&e),
+        }
+    }
+    let file = match &source {
+        LaunchSource::File(path) => LaunchFile::load(path, &pairs),
+        LaunchSource::Embedded => LaunchFile::parse(DEMO_LAUNCH, "launch_scripts/demo.launch.yaml", &pairs),
+    };
+    let plan = match file.and_then(|f| f.plan(resolve_exec)) {
+        Ok(plan) => plan,
+        Err(e) => return fail(&e),
+    };
+    // One id for every node's Rerun recording, so a viewer shows the run as one.
+    let run_id = format!("cell-{}", std::process::id());
+    let runtime = match tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build() {
+        Ok(rt) => rt,
+        Err(e) => return fail(&format!("cannot start the async runtime: {e}")),
+    };
+    let options = SupervisorOptions {
+        stop_others_when: stop,
+        ..Default::default()
+    };
+    let plan: Vec<_> = plan
+        .into_iter()
+        .map(|mut node| {
+            node.env.push(("CELL_RUN_ID".into(), run_id.clone()));
+            node
+        })
+        .collect();
+    let started = std::time::Instant::now();
+    match runtime.block_on(supervise(plan, options)) {
+        Ok(summary) => {
+            let nodes: Vec<String> = summary
+                .nodes
+                .iter()
+                .map(|n| {
+                    let status = n.status.map_or("unknown".to_string(), |s| s.to_string());
+                    format!("{} ({status}, {:.1} s{})", n.label, n.runtime.as_secs_f64(), if n.stopped { ", stopped" } else { "" })
+                })
+                .collect();
+            let verdict = if summary.is_success() { "ok" } else { "FAILED" };
+            println!("cell: {verdict} after {:.1} s: {}", started.elapsed().as_secs_f64(), nodes.join(", "));
+            if let cell_launch::Outcome::Failed { message, .. } = &summary.outcome {
+                eprintln!("error: {message}");
+            }
+            ExitCode::from(summary.exit_code().clamp(0, 255) as u8)
+        }
+        Err(e) => fail(&e),
+    }
+}

@@ -1,0 +1,72 @@
+//! The cellsuite node runtime: what every node is built on.
+//!
+//! - [`args`]: the ROS 2 command line (`--ros-args -r … -p … --params-file …`);
+//! - [`params`]: ROS 2 parameter YAML validated into typed structs;
+//! - [`node`]: [`CellNode`], one DDS participant per node, `ROS_DOMAIN_ID`, interface binding;
+//! - [`qos`]: QoS presets for plans, streams and status;
+//! - [`pubsub`]: typed publish/subscribe, DDS plus the iceoryx2 [`fastpath`] for large messages;
+//! - [`rerun_sink`]: the shared Rerun sink and its entity-path conventions;
+//! - [`logging`], [`shutdown`]: `tracing` set-up and clean SIGINT/SIGTERM handling;
+//! - [`run_node`]: the `main` of every node binary.
+
+pub mod args;
+pub mod fastpath;
+pub mod logging;
+pub mod node;
+pub mod params;
+pub mod pubsub;
+pub mod qos;
+pub mod rerun_sink;
+pub mod shutdown;
+
+use std::{future::Future, process::ExitCode};
+
+pub use node::{CellNode, FastPathMode, Network, NodeSetup};
+pub use pubsub::{Publisher, Received, Subscriber, Via};
+pub use qos::QosPreset;
+pub use rerun_sink::{RerunSink, RerunTarget};
+pub use shutdown::Shutdown;
+
+/// Exit status for a bad command line, parameter or launch file (as `sysexits`' EX_USAGE).
+pub const EXIT_USAGE: u8 = 64;
+
+/// Runs a node binary: logging, command line (`argv` excludes the program name), node set-up
+/// with OS-signal shutdown, then `body`. Any error is printed once, as one line, and becomes a
+/// non-zero exit; set-up errors (arguments, parameters) exit with [`EXIT_USAGE`].
+pub fn run_node<F, Fut>(default_name: &str, argv: Vec<String>, body: F) -> ExitCode
+where
+    F: FnOnce(CellNode) -> Fut,
+    Fut: Future<Output = anyhow::Result<()>>,
+{
+    let parsed = args::NodeArgs::parse(argv.clone());
+    logging::init(parsed.as_ref().ok().and_then(|a| a.ros.log_level.as_deref()));
+    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("error: {default_name}: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    runtime.block_on(async move {
+        let node = match NodeSetup::from_args(default_name, argv).and_then(|mut setup| {
+            setup.shutdown = Shutdown::new().with_os_signals();
+            CellNode::new(setup)
+        }) {
+            Ok(node) => node,
+            Err(e) => {
+                eprintln!("error: {default_name}: {e:#}");
+                return ExitCode::from(EXIT_USAGE);
+            }
+        };
+        let sink = node.rerun().clone();
+        let result = body(node).await;
+        sink.flush();
+        match result {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {default_name}: {e:#}");
+                ExitCode::FAILURE
+            }
+        }
+    })
+}

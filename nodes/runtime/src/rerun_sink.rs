@@ -1,0 +1,240 @@
+//! The Rerun sink every node logs to: `--rerun off | save:PATH | connect:ADDR`.
+//!
+//! # Entity paths
+//! One tree for the whole cell, so recordings from several nodes line up in one viewer:
+//!
+//! | entity path                    | what                                    | logged by        |
+//! |--------------------------------|-----------------------------------------|------------------|
+//! | `/hotwire/trajectory`          | wire path, root (XY) plane              | planner          |
+//! | `/hotwire/trajectory_tip`      | wire path, tip (UV) plane               | planner          |
+//! | `/hotwire/exposure`            | exposure matrix / profile (HeatMap)     | planner          |
+//! | `/sheet/toolpath`              | cut order and travel moves              | sequencer        |
+//! | `/sheet/heat`                  | sheet temperature raster (HeatMap)      | sequencer        |
+//! | `/waam/toolpath`, `/waam/layers` | bead paths, slices                    | slicer           |
+//! | `/extrusion/toolpath`          | wing perimeters and spars               | slicer           |
+//! | `/machine/<id>/position`       | streamed machine position               | machine_bridge   |
+//! | `/monitor/<topic>`             | whatever the monitor node received      | monitor          |
+//!
+//! [`toolpath_entity`] gives the default path for a `Toolpath` by its process. Timelines:
+//! `ros_time` (the message header stamp) and `frame` (a per-node counter).
+//!
+//! `save:PATH` may contain `{node}`, replaced by the node name, so several nodes launched with
+//! one setting write separate `.rrd` files. `connect:ADDR` takes `host:port` (the viewer's gRPC
+//! port, 9876 by default) or a full `rerun+http://…/proxy` URL.
+
+use std::path::PathBuf;
+
+use cell_msgs::{HeatMap, Toolpath, ToolpathSegment};
+use rerun::RecordingStream;
+
+/// Where a node's Rerun data goes.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum RerunTarget {
+    /// Nothing is logged.
+    #[default]
+    Off,
+    /// Written to an `.rrd` file; `{node}` in the path is replaced by the node name.
+    Save(PathBuf),
+    /// Streamed to a running viewer.
+    Connect(String),
+}
+
+/// A `--rerun` value that is none of `off`, `save:PATH`, `connect:ADDR`.
+#[derive(Debug, thiserror::Error)]
+#[error("--rerun {0:?}: expected off, save:PATH or connect:HOST:PORT")]
+pub struct RerunTargetError(String);
+
+impl std::str::FromStr for RerunTarget {
+    type Err = RerunTargetError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.split_once(':') {
+            _ if s == "off" => Ok(RerunTarget::Off),
+            Some(("save", path)) if !path.is_empty() => Ok(RerunTarget::Save(path.into())),
+            Some(("connect", addr)) if !addr.is_empty() => Ok(RerunTarget::Connect(addr.into())),
+            _ => Err(RerunTargetError(s.to_string())),
+        }
+    }
+}
+
+impl RerunTarget {
+    /// The file a node named `node` saves to, if any.
+    pub fn save_path(&self, node: &str) -> Option<PathBuf> {
+        match self {
+            RerunTarget::Save(p) => Some(p.to_string_lossy().replace("{node}", node).into()),
+            _ => None,
+        }
+    }
+}
+
+/// A node's Rerun recording, or nothing when off. Logging never fails a node: errors are
+/// reported once through `tracing` and the data is dropped.
+#[derive(Clone, Default)]
+pub struct RerunSink {
+    stream: Option<RecordingStream>,
+}
+
+impl std::fmt::Debug for RerunSink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RerunSink").field("enabled", &self.stream.is_some()).finish()
+    }
+}
+
+/// The Rerun application id all cellsuite nodes share.
+pub const APPLICATION_ID: &str = "cellsuite";
+
+impl RerunSink {
+    /// Opens the sink. `recording_id` ties the recordings of one cell run together (the launcher
+    /// passes the same one to every node through `CELL_RUN_ID`).
+    pub fn open(target: &RerunTarget, node: &str, recording_id: &str) -> anyhow::Result<Self> {
+        let builder = rerun::RecordingStreamBuilder::new(APPLICATION_ID).recording_id(recording_id);
+        let stream = match target {
+            RerunTarget::Off => return Ok(Self::default()),
+            RerunTarget::Save(_) => {
+                let path = target.save_path(node).expect("save target has a path");
+                if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                    std::fs::create_dir_all(dir)
+                        .map_err(|e| anyhow::anyhow!("--rerun save:{}: {e}", path.display()))?;
+                }
+                builder
+                    .save(&path)
+                    .map_err(|e| anyhow::anyhow!("--rerun save:{}: {e}", path.display()))?
+            }
+            RerunTarget::Connect(addr) => {
+                let url = if addr.contains("://") {
+                    addr.clone()
+                } else {
+                    format!("rerun+http://{addr}/proxy")
+                };
+                builder
+                    .connect_grpc_opts(url.clone())
+                    .map_err(|e| anyhow::anyhow!("--rerun connect:{addr} ({url}): {e}"))?
+            }
+        };
+        Ok(Self {
+            stream: Some(stream),
+        })
+    }
+
+    /// The underlying stream, for archetypes this module has no helper for.
+    pub fn stream(&self) -> Option<&RecordingStream> {
+        self.stream.as_ref()
+    }
+
+    /// Whether anything is recorded.
+    pub fn is_enabled(&self) -> bool {
+        self.stream.is_some()
+    }
+
+    /// Sets the `ros_time` timeline from a header stamp and `frame` from a counter.
+    pub fn set_time(&self, stamp: &cell_msgs::builtin_interfaces::Time, frame: i64) {
+        if let Some(rec) = &self.stream {
+            let secs = stamp.sec as f64 + stamp.nanosec as f64 * 1e-9;
+            rec.set_duration_secs("ros_time", secs);
+            rec.set_time_sequence("frame", frame);
+        }
+    }
+
+    /// Logs a toolpath as line strips, one per segment, coloured by segment kind. Hot-wire tip
+    /// (secondary-plane) points go to `<entity>_tip`.
+    pub fn log_toolpath(&self, entity: &str, toolpath: &Toolpath) {
+        let Some(rec) = &self.stream else { return };
+        let strips = |secondary: bool| -> (Vec<Vec<[f32; 3]>>, Vec<rerun::Color>) {
+            toolpath
+                .segments
+                .iter()
+                .filter_map(|seg| {
+                    let pts = if secondary { &seg.secondary_points } else { &seg.points };
+                    (!pts.is_empty()).then(|| {
+                        let strip = pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
+                        (strip, segment_color(seg))
+                    })
+                })
+                .unzip()
+        };
+        let (primary, colors) = strips(false);
+        self.report(rec.log(entity, &rerun::LineStrips3D::new(primary).with_colors(colors)));
+        let (secondary, colors) = strips(true);
+        if !secondary.is_empty() {
+            let tip = format!("{entity}_tip");
+            self.report(rec.log(tip, &rerun::LineStrips3D::new(secondary).with_colors(colors)));
+        }
+    }
+
+    /// Logs a heat map as a colour-mapped scalar image.
+    pub fn log_heat_map(&self, entity: &str, heat: &HeatMap) {
+        let Some(rec) = &self.stream else { return };
+        let bytes: Vec<u8> = heat.data.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let image = rerun::DepthImage::from_data_type_and_bytes(
+            bytes,
+            [heat.width, heat.height],
+            rerun::ChannelDatatype::F32,
+        )
+        .with_colormap(rerun::components::Colormap::Inferno);
+        self.report(rec.log(entity, &image));
+    }
+
+    /// Logs a line of text (an event the viewer should show in its log panel).
+    pub fn log_text(&self, entity: &str, text: &str) {
+        if let Some(rec) = &self.stream {
+            self.report(rec.log(entity, &rerun::TextLog::new(text)));
+        }
+    }
+
+    /// Writes out everything buffered; call before the process exits.
+    pub fn flush(&self) {
+        if let Some(rec) = &self.stream {
+            if let Err(e) = rec.flush_blocking() {
+                tracing::warn!("rerun: flush failed: {e}");
+            }
+        }
+    }
+
+    fn report(&self, result: rerun::RecordingStreamResult<()>) {
+        if let Err(e) = result {
+            tracing::warn!("rerun: {e}");
+        }
+    }
+}
+
+/// Default entity path for a toolpath, by process (see the table in the module docs).
+pub fn toolpath_entity(toolpath: &Toolpath) -> &'static str {
+    match toolpath.process {
+        Toolpath::PROCESS_HOTWIRE => "/hotwire/trajectory",
+        Toolpath::PROCESS_SHEET_CUT => "/sheet/toolpath",
+        Toolpath::PROCESS_WAAM => "/waam/toolpath",
+        Toolpath::PROCESS_EXTRUSION => "/extrusion/toolpath",
+        _ => "/toolpath",
+    }
+}
+
+fn segment_color(seg: &ToolpathSegment) -> rerun::Color {
+    match seg.kind {
+        ToolpathSegment::KIND_CUT => rerun::Color::from_rgb(230, 80, 40),
+        ToolpathSegment::KIND_TRAVEL => rerun::Color::from_rgb(120, 120, 120),
+        ToolpathSegment::KIND_DEPOSIT => rerun::Color::from_rgb(240, 180, 30),
+        _ => rerun::Color::from_rgb(60, 140, 230),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_targets() {
+        assert_eq!("off".parse::<RerunTarget>().unwrap(), RerunTarget::Off);
+        assert_eq!(
+            "save:out/{node}.rrd".parse::<RerunTarget>().unwrap().save_path("planner"),
+            Some(PathBuf::from("out/planner.rrd"))
+        );
+        assert_eq!(
+            "connect:127.0.0.1:9876".parse::<RerunTarget>().unwrap(),
+            RerunTarget::Connect("127.0.0.1:9876".into())
+        );
+        for bad in ["", "on", "save:", "connect:", "file:x.rrd"] {
+            let err = bad.parse::<RerunTarget>().unwrap_err().to_string();
+            assert!(err.contains("expected off, save:PATH or connect:HOST:PORT"), "{err}");
+        }
+    }
+}

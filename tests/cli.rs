@@ -1,0 +1,135 @@
+//! The `cell` binary end to end: the demo, launch files, and bad input of every kind giving one
+//! clear error line and a non-zero exit, never a panic.
+
+mod common;
+
+use std::{
+    path::Path,
+    process::{Command, Output},
+};
+
+fn cell(args: &[&str], domain: u16) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cell"))
+        .args(args)
+        .env("ROS_DOMAIN_ID", domain.to_string())
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run cell")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Asserts a usage failure: exit 64, an `error:` line containing every `needle`, no panic.
+fn assert_clear_error(out: &Output, needles: &[&str]) {
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(64), "stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line in {stderr}"));
+    for needle in needles {
+        assert!(line.contains(needle), "{needle:?} not in {line:?}");
+    }
+}
+
+#[test]
+fn demo_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
+    let rrd = tempfile::tempdir().unwrap();
+    let save = format!("save:{}", rrd.path().display());
+    let out = cell(&["demo", "--rerun", &save, "heat_map_frames:=30"], common::fresh_domain());
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}");
+    let summary = stdout.lines().find(|l| l.contains("monitor /cell/monitor:")).expect("monitor summary");
+    assert!(summary.contains("1 toolpath(s)"), "{summary}");
+    assert!(summary.contains("job \"demo-block\", 4 segments"), "{summary}");
+    assert!(summary.contains("sheet_temperature 1024x1024"), "{summary}");
+    assert!(stdout.lines().any(|l| l.starts_with("cell: ok after")), "{stdout}");
+    for node in ["monitor", "probe"] {
+        let file = rrd.path().join(format!("{node}.rrd"));
+        let bytes = std::fs::read(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(bytes.starts_with(b"RRF2"), "{} is not an .rrd file", file.display());
+        assert!(bytes.len() > 1024, "{} holds almost nothing", file.display());
+    }
+}
+
+#[test]
+fn malformed_launch_file_names_file_and_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("bad.launch.yaml");
+    std::fs::write(&file, "launch:\n- node:\n    pkg: cellsuite\n    exec: monitor\n    remaps: []\n").unwrap();
+    let out = cell(&["launch", file.to_str().unwrap()], 0);
+    assert_clear_error(&out, &["bad.launch.yaml", "remaps"]);
+
+    std::fs::write(&file, "launch:\n- node: {pkg: cellsuite, exec: no_such_node}\n").unwrap();
+    let out = cell(&["launch", file.to_str().unwrap()], 0);
+    assert_clear_error(&out, &["bad.launch.yaml", "no_such_node"]);
+
+    let out = cell(&["launch", "/nonexistent/x.launch.yaml"], 0);
+    assert_clear_error(&out, &["/nonexistent/x.launch.yaml"]);
+}
+
+#[test]
+fn bad_ros_args_and_params_are_one_line_errors() {
+    let out = cell(&["node", "monitor", "--ros-args", "-p", "timeout_s"], 0);
+    assert_clear_error(&out, &["monitor", "-p", "timeout_s"]);
+
+    let out = cell(&["node", "monitor", "--ros-args", "-p", "timeout_s:=soon"], 0);
+    assert_clear_error(&out, &["-p timeout_s", "parameter `timeout_s`"]);
+
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("monitor.yaml");
+    std::fs::write(&params, "monitor:\n  ros__parameters:\n    expect_toolpath: 1\n").unwrap();
+    let out = cell(&["node", "monitor", "--ros-args", "--params-file", params.to_str().unwrap()], 0);
+    assert_clear_error(&out, &["monitor.yaml", "expect_toolpath"]);
+
+    let out = cell(&["node", "monitor", "--bogus"], 0);
+    assert_clear_error(&out, &["--bogus"]);
+
+    let out = Command::new(env!("CARGO_BIN_EXE_cell"))
+        .args(["node", "monitor"])
+        .env("ROS_DOMAIN_ID", "999")
+        .output()
+        .unwrap();
+    assert_clear_error(&out, &["ROS_DOMAIN_ID", "999"]);
+}
+
+#[test]
+fn shipped_params_files_are_valid() {
+    // Every node accepts its own shipped params file (it would exit 64 on a bad key); a
+    // timeout of 0.2 s makes the monitor stop quickly.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let monitor = root.join("config/monitor.yaml");
+    let out = cell(
+        &["node", "monitor", "--ros-args", "--params-file", monitor.to_str().unwrap(), "-p", "expect_toolpaths:=1", "-p", "timeout_s:=0.2"],
+        common::fresh_domain(),
+    );
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("timed out after 0.2 s"), "{stderr}");
+
+    let probe = root.join("config/cell_probe.yaml");
+    let out = cell(
+        &["node", "cell_probe", "--ros-args", "--params-file", probe.to_str().unwrap(), "-p", "heat_map_frames:=1"],
+        common::fresh_domain(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+}
+
+#[test]
+fn a_node_dying_at_start_fails_the_launch_loudly() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("dies.launch.yaml");
+    std::fs::write(
+        &file,
+        "launch:\n- node: {pkg: cellsuite, exec: monitor, name: watcher, param: [{name: timeout_s, value: 600.0}]}\n\
+         - node: {pkg: cellsuite, exec: cell_probe, name: broken, param: [{name: no_such_param, value: 1}]}\n",
+    )
+    .unwrap();
+    let started = std::time::Instant::now();
+    let out = cell(&["launch", file.to_str().unwrap()], common::fresh_domain());
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("broken") && stderr.contains("died at start"), "{stderr}");
+    assert!(stderr.contains("no_such_param"), "the node's own error is forwarded: {stderr}");
+    assert!(started.elapsed().as_secs() < 30, "the healthy node was not stopped promptly");
+}
