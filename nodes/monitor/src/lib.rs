@@ -159,8 +159,7 @@ pub async fn watch(node: &CellNode, p: &MonitorParams) -> anyhow::Result<Summary
 }
 
 /// Runs the node and prints the summary on stdout.
-pub async fn run(node: CellNode) -> anyhow::Result<()> {
-    let p: MonitorParams = node.params()?;
+pub async fn run(node: CellNode, p: MonitorParams) -> anyhow::Result<()> {
     let summary = watch(&node, &p).await?;
     println!("monitor {}: {summary}", node.fully_qualified_name());
     Ok(())

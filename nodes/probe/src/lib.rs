@@ -187,8 +187,7 @@ pub fn hot_spot(width: u32, height: u32, index: u32) -> HeatMap {
 }
 
 /// Publishes the test block once and the heat-map frames at the configured rate.
-pub async fn run(node: CellNode) -> anyhow::Result<()> {
-    let p: ProbeParams = node.params()?;
+pub async fn run(node: CellNode, p: ProbeParams) -> anyhow::Result<()> {
     let toolpaths = node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?;
     let heat = node.publisher::<HeatMap>("heat_map", QosPreset::Stream)?;
     if p.wait_for_subscribers > 0 {

@@ -31,11 +31,13 @@ pub use shutdown::Shutdown;
 pub const EXIT_USAGE: u8 = 64;
 
 /// Runs a node binary: logging, command line (`argv` excludes the program name), node set-up
-/// with OS-signal shutdown, then `body`. Any error is printed once, as one line, and becomes a
-/// non-zero exit; set-up errors (arguments, parameters) exit with [`EXIT_USAGE`].
-pub fn run_node<F, Fut>(default_name: &str, argv: Vec<String>, body: F) -> ExitCode
+/// with OS-signal shutdown, parameters validated into `P`, then `body`. Any error is printed
+/// once, as one line, and becomes a non-zero exit; set-up errors (arguments, parameters, the
+/// environment) exit with [`EXIT_USAGE`].
+pub fn run_node<P, F, Fut>(default_name: &str, argv: Vec<String>, body: F) -> ExitCode
 where
-    F: FnOnce(CellNode) -> Fut,
+    P: serde::de::DeserializeOwned,
+    F: FnOnce(CellNode, P) -> Fut,
     Fut: Future<Output = anyhow::Result<()>>,
 {
     let parsed = args::NodeArgs::parse(argv.clone());
@@ -48,18 +50,19 @@ where
         }
     };
     runtime.block_on(async move {
-        let node = match NodeSetup::from_args(default_name, argv).and_then(|mut setup| {
+        let node = NodeSetup::from_args(default_name, argv).and_then(|mut setup| {
             setup.shutdown = Shutdown::new().with_os_signals();
             CellNode::new(setup)
-        }) {
-            Ok(node) => node,
+        });
+        let (node, params) = match node.and_then(|node| Ok((node.params::<P>()?, node))) {
+            Ok((params, node)) => (node, params),
             Err(e) => {
                 eprintln!("error: {default_name}: {e:#}");
                 return ExitCode::from(EXIT_USAGE);
             }
         };
         let sink = node.rerun().clone();
-        let result = body(node).await;
+        let result = body(node, params).await;
         sink.flush();
         match result {
             Ok(()) => ExitCode::SUCCESS,

@@ -4,7 +4,8 @@ use tracing_subscriber::EnvFilter;
 
 /// Directives applied under `RUST_LOG`: the DDS stack logs every discovery event at `info`,
 /// which buries the cell's own messages, so it is held to warnings unless asked for.
-pub const QUIET_DEPENDENCIES: &str = "rustdds=warn,ros2_client=warn,iceoryx2=warn,re_sdk=warn";
+pub const QUIET_DEPENDENCIES: &str =
+    "rustdds=warn,ros2_client=warn,ros2_client::distributions=error,iceoryx2=warn,re_sdk=warn";
 
 /// Installs the global subscriber: `RUST_LOG` if set (plus [`QUIET_DEPENDENCIES`] for crates it
 /// does not mention), else `default_level`. Safe to call more than once (later calls do nothing),
