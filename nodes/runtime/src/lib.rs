@@ -49,7 +49,8 @@ where
             return ExitCode::FAILURE;
         }
     };
-    runtime.block_on(async move {
+    let mut participant = None;
+    let code = runtime.block_on(async {
         let node = NodeSetup::from_args(default_name, argv).and_then(|mut setup| {
             setup.shutdown = Shutdown::new().with_os_signals();
             CellNode::new(setup)
@@ -62,6 +63,7 @@ where
             }
         };
         let sink = node.rerun().clone();
+        participant = Some(node.participant_guard());
         let result = body(node, params).await;
         sink.flush();
         match result {
@@ -71,5 +73,9 @@ where
                 ExitCode::FAILURE
             }
         }
-    })
+    });
+    // The runtime drops the graph spinner; only then may the DDS participant go.
+    drop(runtime);
+    drop(participant);
+    code
 }

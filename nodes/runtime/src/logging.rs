@@ -1,11 +1,16 @@
 //! `tracing` set-up shared by every node and the `cell` command.
 
+use std::io::IsTerminal;
+
 use tracing_subscriber::EnvFilter;
 
-/// Directives applied under `RUST_LOG`: the DDS stack logs every discovery event at `info`,
-/// which buries the cell's own messages, so it is held to warnings unless asked for.
-pub const QUIET_DEPENDENCIES: &str =
-    "rustdds=warn,ros2_client=warn,ros2_client::distributions=error,iceoryx2=warn,re_sdk=warn";
+/// Directives applied under `RUST_LOG`. rustdds reports routine discovery conditions as
+/// warnings (no multicast on `lo`, peers whose locators are not confirmed yet) and, on loopback,
+/// an error when it leaves a multicast group it never joined; those bury the cell's own
+/// messages, so rustdds is held to errors and its UDP listener is silent unless asked for
+/// (e.g. `RUST_LOG=info,rustdds=warn`).
+pub const QUIET_DEPENDENCIES: &str = "rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
+     ros2_client::distributions=error,iceoryx2=warn,re_sdk=warn";
 
 /// Installs the global subscriber: `RUST_LOG` if set (plus [`QUIET_DEPENDENCIES`] for crates it
 /// does not mention), else `default_level`. Safe to call more than once (later calls do nothing),
@@ -30,5 +35,6 @@ pub fn init(default_level: Option<&str>) {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none())
         .try_init();
 }

@@ -303,8 +303,22 @@ impl CellNode {
         self.inner.fast_path.as_ref()
     }
 
+    /// A handle that keeps the DDS participant alive. ros2-client's graph spinner drops its
+    /// context before its own readers and writers, which then log errors as they find the
+    /// participant gone; holding this until the tokio runtime has dropped the spinner avoids that.
+    pub fn participant_guard(&self) -> impl Drop + Send + 'static {
+        ParticipantGuard(self.inner._context.clone())
+    }
+
     pub(crate) fn with_ros_node<R>(&self, f: impl FnOnce(&mut ros2_client::Node) -> R) -> R {
         let mut guard = self.inner.ros_node.lock().unwrap_or_else(|p| p.into_inner());
         f(&mut guard)
     }
+}
+
+/// See [`CellNode::participant_guard`].
+struct ParticipantGuard(#[allow(dead_code)] Context);
+
+impl Drop for ParticipantGuard {
+    fn drop(&mut self) {}
 }

@@ -107,9 +107,11 @@ impl<T: RosMessage> Publisher<T> {
         &self.topic
     }
 
-    /// Matched DDS subscriptions (including local ones that also read shared memory).
+    /// DDS subscriptions discovered on this topic (including local ones that also read shared
+    /// memory). Counted from discovery rather than ros2-client's per-writer match table, which
+    /// logs an error for every query made before the graph spinner has caught up.
     pub fn dds_subscription_count(&self) -> usize {
-        self.node.with_ros_node(|n| self.dds.get_subscription_count(n))
+        self.node.with_ros_node(|n| n.subscription_count(&self.topic))
     }
 
     /// Waits until at least `count` subscribers (DDS or shared memory) are matched, or `timeout`.
