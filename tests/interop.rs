@@ -18,26 +18,39 @@ fn peer_script() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/interop/ros_peer.py")
 }
 
+/// The Python that runs the Cyclone peer: `CELL_TEST_PYTHON` if set, else a virtualenv under
+/// the target directory, created and filled from `tests/interop/requirements.txt` (PyPI) on
+/// first use, so `cargo test` needs no manual set-up.
 fn python() -> String {
-    std::env::var("CELL_TEST_PYTHON").unwrap_or_else(|_| "python3".into())
-}
-
-/// Fails with the install hint when the peer's Python package is missing.
-fn require_cyclonedds() {
-    let ok = std::process::Command::new(python())
-        .args(["-c", "import cyclonedds"])
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(
-        ok,
-        "the Cyclone DDS test peer needs `pip install -r tests/interop/requirements.txt` ({})",
-        python()
-    );
+    if let Ok(python) = std::env::var("CELL_TEST_PYTHON") {
+        return python;
+    }
+    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("interop-venv");
+    let python = venv.join("bin/python");
+    let has_peer = |python: &std::path::Path| {
+        std::process::Command::new(python)
+            .args(["-c", "import cyclonedds"])
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if !has_peer(&python) {
+        let requirements = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/interop/requirements.txt");
+        let run = |cmd: &mut std::process::Command| {
+            let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
+            assert!(out.status.success(), "{cmd:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+        };
+        run(std::process::Command::new("python3").args(["-m", "venv"]).arg(&venv));
+        run(std::process::Command::new(&python)
+            .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
+            .arg(&requirements));
+        assert!(has_peer(&python), "{} cannot import cyclonedds after installing it", python.display());
+    }
+    python.display().to_string()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
-    require_cyclonedds();
+    let python = python();
     let domain = fresh_domain();
     let ours = node("interop", domain, false);
 
@@ -56,7 +69,7 @@ async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
         .unwrap();
     toolpaths.publish(block.clone()).await.unwrap();
 
-    let mut listen = tokio::process::Command::new(python())
+    let mut listen = tokio::process::Command::new(&python)
         .arg(peer_script())
         .args(["listen", "--domain", &domain.to_string(), "--timeout", "60"])
         .args(["--topic", "chatter:std_msgs/String", "--topic", "toolpath:cell_msgs/Toolpath"])
@@ -99,7 +112,7 @@ async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
 
     // Cyclone publishes; our side listens.
     let mut inbox = ours.subscriber::<StringMsg>("/from_cyclone", QosPreset::Plan).unwrap();
-    let mut talk = tokio::process::Command::new(python())
+    let mut talk = tokio::process::Command::new(&python)
         .arg(peer_script())
         .args(["talk", "--domain", &domain.to_string(), "--topic", "from_cyclone"])
         .args(["--data", "hello from cyclone", "--count", "60", "--period", "0.25"])

@@ -114,3 +114,46 @@ async fn collect(mut sub: Subscriber<HeatMap>) -> Vec<(Via, Vec<f32>)> {
     }
     seen
 }
+
+/// Undecodable samples, over DDS and over shared memory, are logged and skipped; the subscriber
+/// keeps delivering the valid messages that follow.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn undecodable_messages_are_skipped_and_the_node_stays_up() {
+    use ros2_client::{Context, MessageTypeName, Name, NodeName, NodeOptions};
+    use ros2_client::dds::rustdds::DomainParticipantBuilder;
+
+    let domain = fresh_domain();
+    let listener = node("listener", domain, true);
+    let mut paths = listener.subscriber::<Toolpath>("/toolpath", QosPreset::Plan).unwrap();
+    let mut heat = listener.subscriber::<HeatMap>("/heat_map", QosPreset::Stream).unwrap();
+
+    // A raw participant that claims to publish Toolpaths but sends a single byte.
+    let participant = DomainParticipantBuilder::new(domain)
+        .with_only_networks([std::net::IpAddr::from([127, 0, 0, 1])])
+        .build()
+        .unwrap();
+    let context = Context::from_domain_participant(participant).unwrap();
+    let mut rogue = context.new_node(NodeName::new("/", "rogue").unwrap(), NodeOptions::new()).unwrap();
+    let qos = QosPreset::Plan.profile();
+    let topic = rogue
+        .create_topic(&Name::parse("/toolpath").unwrap(), MessageTypeName::new("cell_msgs", "Toolpath"), &qos)
+        .unwrap();
+    let garbage = rogue.create_publisher::<u8>(&topic, Some(qos)).unwrap();
+    for _ in 0..3 {
+        garbage.publish(0xAB).unwrap();
+    }
+    // And a shared-memory frame that is not a HeatMap.
+    let fast = cell_runtime::fastpath::FastPath::open(domain).unwrap();
+    let junk = fast.publisher("/heat_map", <HeatMap as cell_msgs::RosMessage>::ROS_NAME, [7; 16]).unwrap();
+    junk.send_copy(&[0, 1, 0, 0, 0xFF, 0xFF]).unwrap();
+
+    let talker = node("talker", domain, true);
+    let block = test_block(&ProbeParams::default());
+    let sent = block.clone();
+    let got = deliver(talker.publisher("/toolpath", QosPreset::Plan).unwrap(), &mut paths, move || sent.clone()).await;
+    assert_eq!(got.message, block, "a valid Toolpath still arrives after the garbage");
+    let frame = hot_spot(16, 16, 3);
+    let sent = frame.clone();
+    let got = deliver(talker.publisher("/heat_map", QosPreset::Stream).unwrap(), &mut heat, move || sent.clone()).await;
+    assert_eq!(got.message.data, frame.data, "a valid HeatMap still arrives after the junk frame");
+}
