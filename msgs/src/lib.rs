@@ -58,6 +58,27 @@ pub trait RosMessage:
         format!("{package}::{kind}::dds_::{name}_")
     }
 
+    /// Serializes the message as ROS 2 does (see [`to_cdr`]). Messages dominated by one large
+    /// numeric array ([`HeatMap`]) write it as one block instead of value by value, which is
+    /// byte-identical and far faster (a 1024×1024 heat map: milliseconds less per frame).
+    fn encode(&self) -> Result<Vec<u8>, CdrError> {
+        match (self as &dyn std::any::Any).downcast_ref::<HeatMap>() {
+            Some(heat_map) => heat_map.to_cdr_bulk(),
+            None => to_cdr(self),
+        }
+    }
+
+    /// Reads a ROS 2 serialized message (see [`from_cdr`]); the inverse of [`Self::encode`].
+    fn decode(bytes: &[u8]) -> Result<Self, CdrError> {
+        if std::any::TypeId::of::<Self>() == std::any::TypeId::of::<HeatMap>() {
+            let heat_map: Box<dyn std::any::Any> = Box::new(HeatMap::from_cdr_bulk(bytes)?);
+            if let Ok(this) = heat_map.downcast::<Self>() {
+                return Ok(*this);
+            }
+        }
+        from_cdr(bytes)
+    }
+
     /// The rosbag2 `ros2msg` complete definition, see [`registry::full_definition`].
     ///
     /// # Panics

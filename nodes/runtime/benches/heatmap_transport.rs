@@ -22,7 +22,7 @@ use std::{
     time::{Duration, Instant},
 };
 
-use cell_msgs::{geometry_msgs::Point, std_msgs::Header, HeatMap};
+use cell_msgs::{geometry_msgs::Point, std_msgs::Header, HeatMap, RosMessage};
 use cell_runtime::{
     fastpath::{now_ns, FastPath},
     CellNode, FastPathMode, NodeSetup, QosPreset,
@@ -226,6 +226,7 @@ fn zero_copy(domain: u16, frames: usize) -> Figures {
 }
 
 fn main() {
+    cell_runtime::logging::init(Some("warn"));
     let mut frames = 200usize;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -238,6 +239,25 @@ fn main() {
     println!(
         "heat-map transport: {SIDE}x{SIDE} f32 frames ({:.1} MiB), {frames} frames per figure, one process, loopback",
         (SIDE * SIDE * 4) as f64 / (1024.0 * 1024.0)
+    );
+    let sample = frame(3);
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let bytes = cell_msgs::to_cdr(&sample).unwrap();
+    let serde_encode = ms(t);
+    let t = Instant::now();
+    let decoded: HeatMap = cell_msgs::from_cdr(&bytes).unwrap();
+    let serde_decode = ms(t);
+    let t = Instant::now();
+    let bulk = sample.encode().unwrap();
+    let bulk_encode = ms(t);
+    let t = Instant::now();
+    let bulk_decoded = HeatMap::decode(&bulk).unwrap();
+    let bulk_decode = ms(t);
+    assert!(bulk == bytes && bulk_decoded == decoded);
+    println!(
+        "CDR per frame: serde encode {serde_encode:.2} ms, decode {serde_decode:.2} ms (DDS path); \
+         bulk encode {bulk_encode:.2} ms, decode {bulk_decode:.2} ms (iceoryx2 typed path)"
     );
     let results = vec![
         rt.block_on(typed("dds", false, domain, frames)),

@@ -136,7 +136,7 @@ impl<T: RosMessage> Publisher<T> {
         if let Some(fast) = &self.fast {
             let local = fast.subscriber_count();
             if local > 0 {
-                let bytes = cell_msgs::to_cdr(&*message).with_context(|| format!("encoding for {}", self.topic))?;
+                let bytes = message.encode().with_context(|| format!("encoding for {}", self.topic))?;
                 if let Err(e) = fast.send_copy(&bytes) {
                     tracing::warn!("{}: shared-memory send failed, using DDS: {e}", self.topic);
                 } else if self.dds_subscription_count() <= local {
@@ -199,7 +199,7 @@ impl<T: RosMessage> FastSide<T> {
     fn decode(&self, frame: &Frame) -> Option<Received<T>> {
         let gid = frame.header().writer_gid;
         self.local_writers.lock().unwrap_or_else(|p| p.into_inner()).insert(gid);
-        match cell_msgs::from_cdr::<T>(frame.bytes()) {
+        match T::decode(frame.bytes()) {
             Ok(message) => Some(Received {
                 message,
                 via: Via::SharedMemory,
