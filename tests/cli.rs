@@ -26,7 +26,10 @@ fn assert_clear_error(out: &Output, needles: &[&str]) {
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(64), "stderr: {stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    let line = stderr.lines().find(|l| l.starts_with("error:")).unwrap_or_else(|| panic!("no error line in {stderr}"));
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("no error line in {stderr}"));
     for needle in needles {
         assert!(line.contains(needle), "{needle:?} not in {line:?}");
     }
@@ -36,19 +39,59 @@ fn assert_clear_error(out: &Output, needles: &[&str]) {
 fn demo_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
     let rrd = tempfile::tempdir().unwrap();
     let save = format!("save:{}", rrd.path().display());
-    let out = cell(&["demo", "--rerun", &save, "heat_map_frames:=30"], common::fresh_domain());
+    let out = cell(
+        &["demo", "--rerun", &save, "heat_map_frames:=30"],
+        common::fresh_domain(),
+    );
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
-    assert!(out.status.success(), "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}");
-    let summary = stdout.lines().find(|l| l.contains("monitor /cell/monitor:")).expect("monitor summary");
+    assert!(
+        out.status.success(),
+        "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}"
+    );
+    let summary = stdout
+        .lines()
+        .find(|l| l.contains("monitor /cell/monitor:"))
+        .expect("monitor summary");
     assert!(summary.contains("1 toolpath(s)"), "{summary}");
-    assert!(summary.contains("job \"demo-block\", 4 segments"), "{summary}");
+    assert!(
+        summary.contains("job \"demo-block\", 4 segments"),
+        "{summary}"
+    );
     assert!(summary.contains("sheet_temperature 1024x1024"), "{summary}");
-    assert!(stdout.lines().any(|l| l.starts_with("cell: ok after")), "{stdout}");
-    for node in ["monitor", "probe"] {
+    assert!(
+        stdout.lines().any(|l| l.starts_with("cell: ok after")),
+        "{stdout}"
+    );
+    // The probe was stopped with SIGINT once the monitor was done, and exited cleanly.
+    let ended = stdout
+        .lines()
+        .find(|l| l.starts_with("cell: ok after"))
+        .unwrap();
+    assert!(
+        ended.contains("probe (exit status: 0") && ended.contains("stopped"),
+        "{ended}"
+    );
+
+    // Both .rrd files decode with Rerun's own decoder and hold the documented entities.
+    for (node, entities) in [
+        (
+            "monitor",
+            &["/hotwire/trajectory", "/monitor/sheet_temperature"][..],
+        ),
+        ("probe", &["/hotwire/trajectory", "/sheet/heat"][..]),
+    ] {
         let file = rrd.path().join(format!("{node}.rrd"));
-        let bytes = std::fs::read(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
-        assert!(bytes.starts_with(b"RRF2"), "{} is not an .rrd file", file.display());
-        assert!(bytes.len() > 1024, "{} holds almost nothing", file.display());
+        let reader = std::io::BufReader::new(
+            std::fs::File::open(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display())),
+        );
+        let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
+            .unwrap_or_else(|e| panic!("{} is not a valid .rrd: {e}", file.display()))
+            .collect::<Result<_, _>>()
+            .unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let dump = format!("{messages:?}");
+        for entity in entities {
+            assert!(dump.contains(entity), "{} has no {entity}", file.display());
+        }
     }
 }
 
@@ -56,11 +99,19 @@ fn demo_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
 fn malformed_launch_file_names_file_and_key() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("bad.launch.yaml");
-    std::fs::write(&file, "launch:\n- node:\n    pkg: cellsuite\n    exec: monitor\n    remaps: []\n").unwrap();
+    std::fs::write(
+        &file,
+        "launch:\n- node:\n    pkg: cellsuite\n    exec: monitor\n    remaps: []\n",
+    )
+    .unwrap();
     let out = cell(&["launch", file.to_str().unwrap()], 0);
     assert_clear_error(&out, &["bad.launch.yaml", "remaps"]);
 
-    std::fs::write(&file, "launch:\n- node: {pkg: cellsuite, exec: no_such_node}\n").unwrap();
+    std::fs::write(
+        &file,
+        "launch:\n- node: {pkg: cellsuite, exec: no_such_node}\n",
+    )
+    .unwrap();
     let out = cell(&["launch", file.to_str().unwrap()], 0);
     assert_clear_error(&out, &["bad.launch.yaml", "no_such_node"]);
 
@@ -73,13 +124,29 @@ fn bad_ros_args_and_params_are_one_line_errors() {
     let out = cell(&["node", "monitor", "--ros-args", "-p", "timeout_s"], 0);
     assert_clear_error(&out, &["monitor", "-p", "timeout_s"]);
 
-    let out = cell(&["node", "monitor", "--ros-args", "-p", "timeout_s:=soon"], 0);
+    let out = cell(
+        &["node", "monitor", "--ros-args", "-p", "timeout_s:=soon"],
+        0,
+    );
     assert_clear_error(&out, &["-p timeout_s", "parameter `timeout_s`"]);
 
     let dir = tempfile::tempdir().unwrap();
     let params = dir.path().join("monitor.yaml");
-    std::fs::write(&params, "monitor:\n  ros__parameters:\n    expect_toolpath: 1\n").unwrap();
-    let out = cell(&["node", "monitor", "--ros-args", "--params-file", params.to_str().unwrap()], 0);
+    std::fs::write(
+        &params,
+        "monitor:\n  ros__parameters:\n    expect_toolpath: 1\n",
+    )
+    .unwrap();
+    let out = cell(
+        &[
+            "node",
+            "monitor",
+            "--ros-args",
+            "--params-file",
+            params.to_str().unwrap(),
+        ],
+        0,
+    );
     assert_clear_error(&out, &["monitor.yaml", "expect_toolpath"]);
 
     let out = cell(&["node", "monitor", "--bogus"], 0);
@@ -100,7 +167,17 @@ fn shipped_params_files_are_valid() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let monitor = root.join("config/monitor.yaml");
     let out = cell(
-        &["node", "monitor", "--ros-args", "--params-file", monitor.to_str().unwrap(), "-p", "expect_toolpaths:=1", "-p", "timeout_s:=0.2"],
+        &[
+            "node",
+            "monitor",
+            "--ros-args",
+            "--params-file",
+            monitor.to_str().unwrap(),
+            "-p",
+            "expect_toolpaths:=1",
+            "-p",
+            "timeout_s:=0.2",
+        ],
         common::fresh_domain(),
     );
     let stderr = text(&out.stderr);
@@ -109,7 +186,15 @@ fn shipped_params_files_are_valid() {
 
     let probe = root.join("config/cell_probe.yaml");
     let out = cell(
-        &["node", "cell_probe", "--ros-args", "--params-file", probe.to_str().unwrap(), "-p", "heat_map_frames:=1"],
+        &[
+            "node",
+            "cell_probe",
+            "--ros-args",
+            "--params-file",
+            probe.to_str().unwrap(),
+            "-p",
+            "heat_map_frames:=1",
+        ],
         common::fresh_domain(),
     );
     assert!(out.status.success(), "{}", text(&out.stderr));
@@ -129,7 +214,80 @@ fn a_node_dying_at_start_fails_the_launch_loudly() {
     let out = cell(&["launch", file.to_str().unwrap()], common::fresh_domain());
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("broken") && stderr.contains("died at start"), "{stderr}");
-    assert!(stderr.contains("no_such_param"), "the node's own error is forwarded: {stderr}");
-    assert!(started.elapsed().as_secs() < 30, "the healthy node was not stopped promptly");
+    assert!(
+        stderr.contains("broken") && stderr.contains("died at start"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("no_such_param"),
+        "the node's own error is forwarded: {stderr}"
+    );
+    assert!(
+        started.elapsed().as_secs() < 30,
+        "the healthy node was not stopped promptly"
+    );
+}
+
+#[test]
+fn ros_domain_id_separates_cells() {
+    // A monitor on one domain never hears a probe on another; on the same domain it does.
+    let (mine, other) = (common::fresh_domain(), common::fresh_domain());
+    let monitor = |domain: u16| {
+        Command::new(env!("CARGO_BIN_EXE_cell"))
+            .args(["node", "monitor", "--dds-network", "loopback", "--ros-args"])
+            .args(["-p", "expect_toolpaths:=1", "-p", "timeout_s:=8.0"])
+            .env("ROS_DOMAIN_ID", domain.to_string())
+            .stderr(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let probe = |domain: u16| {
+        cell(
+            &[
+                "node",
+                "cell_probe",
+                "--dds-network",
+                "loopback",
+                "--ros-args",
+                "-p",
+                "heat_map_frames:=0",
+                "-p",
+                "wait_for_subscribers:=1",
+                "-p",
+                "wait_timeout_s:=8.0",
+            ],
+            domain,
+        )
+    };
+    let elsewhere = monitor(other);
+    let lonely = probe(mine);
+    assert_eq!(
+        lonely.status.code(),
+        Some(1),
+        "the probe found a subscriber on another domain"
+    );
+    assert!(
+        text(&lonely.stderr).contains("no subscriber on /toolpath"),
+        "{}",
+        text(&lonely.stderr)
+    );
+    let out = elsewhere.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "the monitor heard another domain: {}",
+        text(&out.stdout)
+    );
+
+    let listening = monitor(mine);
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let _ = probe(mine);
+    let out = listening.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "same domain, nothing heard: {}",
+        text(&out.stderr)
+    );
+    assert!(text(&out.stdout).contains("1 toolpath(s)"));
 }

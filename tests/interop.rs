@@ -34,16 +34,34 @@ fn python() -> String {
             .is_ok_and(|s| s.success())
     };
     if !has_peer(&python) {
-        let requirements = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/interop/requirements.txt");
+        let requirements =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/interop/requirements.txt");
         let run = |cmd: &mut std::process::Command| {
             let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
-            assert!(out.status.success(), "{cmd:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+            assert!(
+                out.status.success(),
+                "{cmd:?} failed: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
         };
-        run(std::process::Command::new("python3").args(["-m", "venv"]).arg(&venv));
+        run(std::process::Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&venv));
         run(std::process::Command::new(&python)
-            .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+                "-r",
+            ])
             .arg(&requirements));
-        assert!(has_peer(&python), "{} cannot import cyclonedds after installing it", python.display());
+        assert!(
+            has_peer(&python),
+            "{} cannot import cyclonedds after installing it",
+            python.display()
+        );
     }
     python.display().to_string()
 }
@@ -55,8 +73,12 @@ async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
     let ours = node("interop", domain, false);
 
     // Our side publishes; Cyclone listens.
-    let chatter = ours.publisher::<StringMsg>("/chatter", QosPreset::Plan).unwrap();
-    let toolpaths = ours.publisher::<Toolpath>("/toolpath", QosPreset::Plan).unwrap();
+    let chatter = ours
+        .publisher::<StringMsg>("/chatter", QosPreset::Plan)
+        .unwrap();
+    let toolpaths = ours
+        .publisher::<Toolpath>("/toolpath", QosPreset::Plan)
+        .unwrap();
     let block = test_block(&ProbeParams {
         job_id: "interop-1".into(),
         ..Default::default()
@@ -72,7 +94,12 @@ async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
     let mut listen = tokio::process::Command::new(&python)
         .arg(peer_script())
         .args(["listen", "--domain", &domain.to_string(), "--timeout", "60"])
-        .args(["--topic", "chatter:std_msgs/String", "--topic", "toolpath:cell_msgs/Toolpath"])
+        .args([
+            "--topic",
+            "chatter:std_msgs/String",
+            "--topic",
+            "toolpath:cell_msgs/Toolpath",
+        ])
         .stdout(Stdio::piped())
         .kill_on_drop(true)
         .spawn()
@@ -85,11 +112,17 @@ async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
     let status = listen.wait().await.unwrap();
     assert!(status.success(), "Cyclone peer: {status}; got {samples:?}");
 
-    let string = samples.iter().find(|s| s["topic"] == "rt/chatter").expect("String sample");
+    let string = samples
+        .iter()
+        .find(|s| s["topic"] == "rt/chatter")
+        .expect("String sample");
     assert_eq!(string["type"], "std_msgs::msg::dds_::String_");
     assert_eq!(string["value"]["data"], "hello from cellsuite");
 
-    let tp = samples.iter().find(|s| s["topic"] == "rt/toolpath").expect("Toolpath sample");
+    let tp = samples
+        .iter()
+        .find(|s| s["topic"] == "rt/toolpath")
+        .expect("Toolpath sample");
     assert_eq!(tp["type"], "cell_msgs::msg::dds_::Toolpath_");
     let value = &tp["value"];
     assert_eq!(value["job_id"], "interop-1");
@@ -102,20 +135,43 @@ async fn cyclone_dds_decodes_our_topics_and_we_decode_theirs() {
         let points = theirs["points"].as_array().unwrap();
         assert_eq!(points.len(), ours.points.len());
         for (p, q) in points.iter().zip(&ours.points) {
-            assert_eq!((p["x"].as_f64(), p["y"].as_f64(), p["z"].as_f64()), (Some(q.x), Some(q.y), Some(q.z)));
+            assert_eq!(
+                (p["x"].as_f64(), p["y"].as_f64(), p["z"].as_f64()),
+                (Some(q.x), Some(q.y), Some(q.z))
+            );
         }
         let tip = theirs["secondary_points"].as_array().unwrap();
         assert_eq!(tip.len(), ours.secondary_points.len());
-        let feeds: Vec<f32> = theirs["feed_mm_s"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap() as f32).collect();
+        let feeds: Vec<f32> = theirs["feed_mm_s"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap() as f32)
+            .collect();
         assert_eq!(feeds, ours.feed_mm_s);
     }
 
     // Cyclone publishes; our side listens.
-    let mut inbox = ours.subscriber::<StringMsg>("/from_cyclone", QosPreset::Plan).unwrap();
+    let mut inbox = ours
+        .subscriber::<StringMsg>("/from_cyclone", QosPreset::Plan)
+        .unwrap();
     let mut talk = tokio::process::Command::new(&python)
         .arg(peer_script())
-        .args(["talk", "--domain", &domain.to_string(), "--topic", "from_cyclone"])
-        .args(["--data", "hello from cyclone", "--count", "60", "--period", "0.25"])
+        .args([
+            "talk",
+            "--domain",
+            &domain.to_string(),
+            "--topic",
+            "from_cyclone",
+        ])
+        .args([
+            "--data",
+            "hello from cyclone",
+            "--count",
+            "60",
+            "--period",
+            "0.25",
+        ])
         .kill_on_drop(true)
         .spawn()
         .expect("start the Cyclone talker");

@@ -6,12 +6,19 @@
 use std::process::{Command, Output};
 
 fn run(cmd: &[&str]) -> Output {
-    Command::new(cmd[0]).args(&cmd[1..]).output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"))
+    Command::new(cmd[0])
+        .args(&cmd[1..])
+        .output()
+        .unwrap_or_else(|e| panic!("{cmd:?}: {e}"))
 }
 
 fn must(cmd: &[&str]) {
     let out = run(cmd);
-    assert!(out.status.success(), "{cmd:?}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{cmd:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// Deletes the namespaces (and with them the veth pair) however the test ends.
@@ -26,7 +33,10 @@ impl Drop for Namespaces {
 }
 
 fn can_make_namespaces() -> Result<(), String> {
-    let out = Command::new("ip").args(["netns", "add", "cellsuite-probe"]).output().map_err(|e| format!("ip: {e}"))?;
+    let out = Command::new("ip")
+        .args(["netns", "add", "cellsuite-probe"])
+        .output()
+        .map_err(|e| format!("ip: {e}"))?;
     if !out.status.success() {
         return Err(String::from_utf8_lossy(&out.stderr).trim().to_string());
     }
@@ -37,7 +47,10 @@ fn can_make_namespaces() -> Result<(), String> {
 #[test]
 fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
     if let Err(why) = can_make_namespaces() {
-        assert!(std::env::var_os("CI").is_none(), "CI must run the multi-host test as root: {why}");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must run the multi-host test as root: {why}"
+        );
         eprintln!("skipping the multi-host test: cannot create network namespaces ({why})");
         return;
     }
@@ -49,10 +62,21 @@ fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
     let _guard = Namespaces(vec![ns_a.clone(), ns_b.clone()]);
     must(&["ip", "netns", "add", &ns_a]);
     must(&["ip", "netns", "add", &ns_b]);
-    must(&["ip", "link", "add", &veth_a, "type", "veth", "peer", "name", &veth_b]);
+    must(&[
+        "ip", "link", "add", &veth_a, "type", "veth", "peer", "name", &veth_b,
+    ]);
     for (ns, veth, addr) in [(&ns_a, &veth_a, &addr_a), (&ns_b, &veth_b, &addr_b)] {
         must(&["ip", "link", "set", veth, "netns", ns]);
-        must(&["ip", "-n", ns, "addr", "add", &format!("{addr}/24"), "dev", veth]);
+        must(&[
+            "ip",
+            "-n",
+            ns,
+            "addr",
+            "add",
+            &format!("{addr}/24"),
+            "dev",
+            veth,
+        ]);
         must(&["ip", "-n", ns, "link", "set", veth, "up", "multicast", "on"]);
         must(&["ip", "-n", ns, "link", "set", "lo", "up"]);
         // DDS discovery is multicast; give it a route out of the veth.
@@ -62,19 +86,54 @@ fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
     let cell = env!("CARGO_BIN_EXE_cell");
     let node = |ns: &str, addr: &str, exec: &str, params: &[&str]| {
         let mut cmd = Command::new("ip");
-        cmd.args(["netns", "exec", ns, cell, "node", exec, "--dds-network", addr, "--fast-path", "off", "--ros-args"]);
+        cmd.args([
+            "netns",
+            "exec",
+            ns,
+            cell,
+            "node",
+            exec,
+            "--dds-network",
+            addr,
+            "--fast-path",
+            "off",
+            "--ros-args",
+        ]);
         for p in params {
             cmd.args(["-p", p]);
         }
         cmd.env("ROS_DOMAIN_ID", "42").env_remove("RUST_LOG");
         cmd
     };
-    let mut probe = node(&ns_a, &addr_a, "cell_probe", &["wait_for_subscribers:=1", "wait_timeout_s:=60.0", "heat_map_frames:=100", "heat_map_width:=64", "heat_map_height:=64", "linger:=true"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("start the probe");
-    let monitor = node(&ns_b, &addr_b, "monitor", &["expect_toolpaths:=1", "expect_heat_maps:=3", "timeout_s:=90.0"]).output().expect("run the monitor");
+    let mut probe = node(
+        &ns_a,
+        &addr_a,
+        "cell_probe",
+        &[
+            "wait_for_subscribers:=1",
+            "wait_timeout_s:=60.0",
+            "heat_map_frames:=100",
+            "heat_map_width:=64",
+            "heat_map_height:=64",
+            "linger:=true",
+        ],
+    )
+    .stdout(std::process::Stdio::null())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .expect("start the probe");
+    let monitor = node(
+        &ns_b,
+        &addr_b,
+        "monitor",
+        &[
+            "expect_toolpaths:=1",
+            "expect_heat_maps:=3",
+            "timeout_s:=90.0",
+        ],
+    )
+    .output()
+    .expect("run the monitor");
     let _ = probe.kill();
     let probe_out = probe.wait_with_output().unwrap();
 
@@ -86,6 +145,9 @@ fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
         String::from_utf8_lossy(&probe_out.stderr)
     );
     assert!(stdout.contains("1 toolpath(s)"), "{stdout}");
-    assert!(stdout.contains("0 over shared memory"), "heat maps must cross the veth link over DDS: {stdout}");
+    assert!(
+        stdout.contains("0 over shared memory"),
+        "heat maps must cross the veth link over DDS: {stdout}"
+    );
     assert!(stdout.contains("job \"probe\", 4 segments"), "{stdout}");
 }

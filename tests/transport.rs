@@ -37,12 +37,18 @@ async fn exchange(fast_path: bool) {
     let listener = node("listener", domain, fast_path);
     assert_eq!(talker.has_fast_path(), fast_path);
 
-    let mut paths = listener.subscriber::<Toolpath>("toolpath", QosPreset::Plan).unwrap();
-    let mut heat = listener.subscriber::<HeatMap>("heat_map", QosPreset::Stream).unwrap();
+    let mut paths = listener
+        .subscriber::<Toolpath>("toolpath", QosPreset::Plan)
+        .unwrap();
+    let mut heat = listener
+        .subscriber::<HeatMap>("heat_map", QosPreset::Stream)
+        .unwrap();
 
     let block = test_block(&ProbeParams::default());
     let sent = block.clone();
-    let publisher = talker.publisher::<Toolpath>("toolpath", QosPreset::Plan).unwrap();
+    let publisher = talker
+        .publisher::<Toolpath>("toolpath", QosPreset::Plan)
+        .unwrap();
     let got = deliver(publisher, &mut paths, move || sent.clone()).await;
     assert_eq!(got.via, Via::Dds, "plans always travel over DDS");
     assert_eq!(to_cdr(&got.message).unwrap(), to_cdr(&block).unwrap());
@@ -50,9 +56,15 @@ async fn exchange(fast_path: bool) {
     let frame = hot_spot(1024, 1024, 7);
     assert_eq!(frame.data.len(), 1024 * 1024);
     let sent = frame.clone();
-    let publisher = talker.publisher::<HeatMap>("heat_map", QosPreset::Stream).unwrap();
+    let publisher = talker
+        .publisher::<HeatMap>("heat_map", QosPreset::Stream)
+        .unwrap();
     let got = deliver(publisher, &mut heat, move || sent.clone()).await;
-    let expected_via = if fast_path { Via::SharedMemory } else { Via::Dds };
+    let expected_via = if fast_path {
+        Via::SharedMemory
+    } else {
+        Via::Dds
+    };
     assert_eq!(got.via, expected_via);
     let (sent_bytes, got_bytes) = (to_cdr(&frame).unwrap(), to_cdr(&got.message).unwrap());
     assert!(sent_bytes.len() > 4 * 1024 * 1024);
@@ -77,14 +89,23 @@ async fn shared_memory_and_dds_readers_each_get_every_frame_once() {
     let talker = node("talker", domain, true);
     let local = node("local", domain, true);
     let dds_only = node("dds_only", domain, false);
-    let fast_sub = local.subscriber::<HeatMap>("heat_map", QosPreset::Stream).unwrap();
-    let dds_sub = dds_only.subscriber::<HeatMap>("heat_map", QosPreset::Stream).unwrap();
-    let publisher = talker.publisher::<HeatMap>("heat_map", QosPreset::Stream).unwrap();
+    let fast_sub = local
+        .subscriber::<HeatMap>("heat_map", QosPreset::Stream)
+        .unwrap();
+    let dds_sub = dds_only
+        .subscriber::<HeatMap>("heat_map", QosPreset::Stream)
+        .unwrap();
+    let publisher = talker
+        .publisher::<HeatMap>("heat_map", QosPreset::Stream)
+        .unwrap();
     assert!(publisher.wait_for_subscribers(2, DELIVERY_TIMEOUT).await);
     // Wait until DDS has matched both readers, so every frame goes both ways.
     let deadline = tokio::time::Instant::now() + DELIVERY_TIMEOUT;
     while publisher.dds_subscription_count() < 2 {
-        assert!(tokio::time::Instant::now() < deadline, "DDS readers never matched");
+        assert!(
+            tokio::time::Instant::now() < deadline,
+            "DDS readers never matched"
+        );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
     let frames = 20u32;
@@ -97,12 +118,26 @@ async fn shared_memory_and_dds_readers_each_get_every_frame_once() {
     }
     let local_seen = local_task.await.unwrap();
     let dds_seen = dds_task.await.unwrap();
-    assert!(local_seen.iter().all(|(via, _)| *via == Via::SharedMemory), "local reader took a DDS copy");
+    assert!(
+        local_seen.iter().all(|(via, _)| *via == Via::SharedMemory),
+        "local reader took a DDS copy"
+    );
     let mut distinct: Vec<_> = local_seen.iter().map(|(_, d)| d.clone()).collect();
     distinct.dedup();
-    assert_eq!(distinct.len(), local_seen.len(), "a frame arrived twice at the local reader");
-    assert!(local_seen.len() >= frames as usize / 2, "local reader got {} of {frames}", local_seen.len());
-    assert!(!dds_seen.is_empty(), "the DDS-only reader got nothing: the publisher skipped DDS");
+    assert_eq!(
+        distinct.len(),
+        local_seen.len(),
+        "a frame arrived twice at the local reader"
+    );
+    assert!(
+        local_seen.len() >= frames as usize / 2,
+        "local reader got {} of {frames}",
+        local_seen.len()
+    );
+    assert!(
+        !dds_seen.is_empty(),
+        "the DDS-only reader got nothing: the publisher skipped DDS"
+    );
     assert!(dds_seen.iter().all(|(via, _)| *via == Via::Dds));
 }
 
@@ -119,13 +154,17 @@ async fn collect(mut sub: Subscriber<HeatMap>) -> Vec<(Via, Vec<f32>)> {
 /// keeps delivering the valid messages that follow.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn undecodable_messages_are_skipped_and_the_node_stays_up() {
-    use ros2_client::{Context, MessageTypeName, Name, NodeName, NodeOptions};
     use ros2_client::dds::rustdds::DomainParticipantBuilder;
+    use ros2_client::{Context, MessageTypeName, Name, NodeName, NodeOptions};
 
     let domain = fresh_domain();
     let listener = node("listener", domain, true);
-    let mut paths = listener.subscriber::<Toolpath>("/toolpath", QosPreset::Plan).unwrap();
-    let mut heat = listener.subscriber::<HeatMap>("/heat_map", QosPreset::Stream).unwrap();
+    let mut paths = listener
+        .subscriber::<Toolpath>("/toolpath", QosPreset::Plan)
+        .unwrap();
+    let mut heat = listener
+        .subscriber::<HeatMap>("/heat_map", QosPreset::Stream)
+        .unwrap();
 
     // A raw participant that claims to publish Toolpaths but sends a single byte.
     let participant = DomainParticipantBuilder::new(domain)
@@ -133,10 +172,16 @@ async fn undecodable_messages_are_skipped_and_the_node_stays_up() {
         .build()
         .unwrap();
     let context = Context::from_domain_participant(participant).unwrap();
-    let mut rogue = context.new_node(NodeName::new("/", "rogue").unwrap(), NodeOptions::new()).unwrap();
+    let mut rogue = context
+        .new_node(NodeName::new("/", "rogue").unwrap(), NodeOptions::new())
+        .unwrap();
     let qos = QosPreset::Plan.profile();
     let topic = rogue
-        .create_topic(&Name::parse("/toolpath").unwrap(), MessageTypeName::new("cell_msgs", "Toolpath"), &qos)
+        .create_topic(
+            &Name::parse("/toolpath").unwrap(),
+            MessageTypeName::new("cell_msgs", "Toolpath"),
+            &qos,
+        )
         .unwrap();
     let garbage = rogue.create_publisher::<u8>(&topic, Some(qos)).unwrap();
     for _ in 0..3 {
@@ -144,16 +189,38 @@ async fn undecodable_messages_are_skipped_and_the_node_stays_up() {
     }
     // And a shared-memory frame that is not a HeatMap.
     let fast = cell_runtime::fastpath::FastPath::open(domain).unwrap();
-    let junk = fast.publisher("/heat_map", <HeatMap as cell_msgs::RosMessage>::ROS_NAME, [7; 16]).unwrap();
+    let junk = fast
+        .publisher(
+            "/heat_map",
+            <HeatMap as cell_msgs::RosMessage>::ROS_NAME,
+            [7; 16],
+        )
+        .unwrap();
     junk.send_copy(&[0, 1, 0, 0, 0xFF, 0xFF]).unwrap();
 
     let talker = node("talker", domain, true);
     let block = test_block(&ProbeParams::default());
     let sent = block.clone();
-    let got = deliver(talker.publisher("/toolpath", QosPreset::Plan).unwrap(), &mut paths, move || sent.clone()).await;
-    assert_eq!(got.message, block, "a valid Toolpath still arrives after the garbage");
+    let got = deliver(
+        talker.publisher("/toolpath", QosPreset::Plan).unwrap(),
+        &mut paths,
+        move || sent.clone(),
+    )
+    .await;
+    assert_eq!(
+        got.message, block,
+        "a valid Toolpath still arrives after the garbage"
+    );
     let frame = hot_spot(16, 16, 3);
     let sent = frame.clone();
-    let got = deliver(talker.publisher("/heat_map", QosPreset::Stream).unwrap(), &mut heat, move || sent.clone()).await;
-    assert_eq!(got.message.data, frame.data, "a valid HeatMap still arrives after the junk frame");
+    let got = deliver(
+        talker.publisher("/heat_map", QosPreset::Stream).unwrap(),
+        &mut heat,
+        move || sent.clone(),
+    )
+    .await;
+    assert_eq!(
+        got.message.data, frame.data,
+        "a valid HeatMap still arrives after the junk frame"
+    );
 }

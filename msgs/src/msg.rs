@@ -340,7 +340,11 @@ mod bulk_tests {
         let data = (0..width * height).map(|i| i as f32 * 0.5 - 3.0).collect();
         let mut h = HeatMap::new(quantity, "K", width, height, data).expect("sized");
         h.header.frame_id = "sheet".into();
-        h.origin = Point { x: 1.0, y: -2.0, z: 0.25 };
+        h.origin = Point {
+            x: 1.0,
+            y: -2.0,
+            z: 0.25,
+        };
         h.threshold = 573.0;
         h
     }
@@ -348,13 +352,25 @@ mod bulk_tests {
     #[test]
     fn bulk_codec_writes_and_reads_exactly_the_serde_bytes() {
         // Quantity lengths vary the padding before the 8-aligned doubles.
-        for (quantity, w, h) in [("", 0, 0), ("t", 3, 1), ("temp", 2, 5), ("sheet_temperature", 64, 32)] {
+        for (quantity, w, h) in [
+            ("", 0, 0),
+            ("t", 3, 1),
+            ("temp", 2, 5),
+            ("sheet_temperature", 64, 32),
+        ] {
             let hm = sample(quantity, w, h);
             let serde_bytes = to_cdr(&hm).unwrap();
-            assert_eq!(hm.to_cdr_bulk().unwrap(), serde_bytes, "{quantity:?} {w}x{h}");
+            assert_eq!(
+                hm.to_cdr_bulk().unwrap(),
+                serde_bytes,
+                "{quantity:?} {w}x{h}"
+            );
             assert_eq!(hm.encode().unwrap(), serde_bytes);
             assert_eq!(HeatMap::from_cdr_bulk(&serde_bytes).unwrap(), hm);
-            assert_eq!(HeatMap::decode(&serde_bytes).unwrap(), from_cdr::<HeatMap>(&serde_bytes).unwrap());
+            assert_eq!(
+                HeatMap::decode(&serde_bytes).unwrap(),
+                from_cdr::<HeatMap>(&serde_bytes).unwrap()
+            );
         }
     }
 
@@ -362,10 +378,17 @@ mod bulk_tests {
     fn bulk_decoder_rejects_what_serde_rejects() {
         let bytes = sample("temp", 4, 4).to_cdr_bulk().unwrap();
         for cut in 0..bytes.len() {
-            assert!(HeatMap::from_cdr_bulk(&bytes[..cut]).is_err(), "accepted {cut} of {} bytes", bytes.len());
+            assert!(
+                HeatMap::from_cdr_bulk(&bytes[..cut]).is_err(),
+                "accepted {cut} of {} bytes",
+                bytes.len()
+            );
         }
         let mut long = bytes.clone();
         long.extend([0; 8]);
-        assert!(HeatMap::from_cdr_bulk(&long).is_err(), "accepted 8 trailing bytes");
+        assert!(
+            HeatMap::from_cdr_bulk(&long).is_err(),
+            "accepted 8 trailing bytes"
+        );
     }
 }

@@ -20,7 +20,11 @@ pub fn fresh_domain() -> u16 {
 /// A node on `domain`, DDS on loopback only, with or without the shared-memory fast path.
 pub fn node(name: &str, domain: u16, fast_path: bool) -> CellNode {
     let mut setup = NodeSetup::local(name, domain);
-    setup.fast_path = if fast_path { FastPathMode::Auto } else { FastPathMode::Off };
+    setup.fast_path = if fast_path {
+        FastPathMode::Auto
+    } else {
+        FastPathMode::Off
+    };
     CellNode::new(setup).expect("node comes up")
 }
 

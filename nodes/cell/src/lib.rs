@@ -9,7 +9,9 @@
 
 use std::{path::PathBuf, process::ExitCode};
 
-use cell_launch::{default_resolver, supervise, LaunchFile, Program, StopOthersWhen, SupervisorOptions};
+use cell_launch::{
+    default_resolver, supervise, LaunchFile, Program, StopOthersWhen, SupervisorOptions,
+};
 use clap::{Parser, Subcommand};
 
 /// The demo cell's launch file, as shipped in `launch_scripts/`.
@@ -25,7 +27,11 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
 ];
 
 #[derive(Parser, Debug)]
-#[command(name = "cell", version, about = "cellsuite: plan, program, stream and watch a thermal manufacturing cell")]
+#[command(
+    name = "cell",
+    version,
+    about = "cellsuite: plan, program, stream and watch a thermal manufacturing cell"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -83,22 +89,37 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Ok(cli) => cli,
         Err(e) => {
             let _ = e.print();
-            return if e.use_stderr() { ExitCode::from(cell_runtime::EXIT_USAGE) } else { ExitCode::SUCCESS };
+            return if e.use_stderr() {
+                ExitCode::from(cell_runtime::EXIT_USAGE)
+            } else {
+                ExitCode::SUCCESS
+            };
         }
     };
     match cli.command {
-        Command::Node { exec, args } => match BUILTIN_NODES.iter().find(|(name, _)| *name == exec) {
-            Some((_, node_main)) => node_main(args),
-            None => {
-                let known: Vec<_> = BUILTIN_NODES.iter().map(|(n, _)| *n).collect();
-                eprintln!("error: cell node: no built-in node {exec:?} (built in: {})", known.join(", "));
-                ExitCode::from(cell_runtime::EXIT_USAGE)
+        Command::Node { exec, args } => {
+            match BUILTIN_NODES.iter().find(|(name, _)| *name == exec) {
+                Some((_, node_main)) => node_main(args),
+                None => {
+                    let known: Vec<_> = BUILTIN_NODES.iter().map(|(n, _)| *n).collect();
+                    eprintln!(
+                        "error: cell node: no built-in node {exec:?} (built in: {})",
+                        known.join(", ")
+                    );
+                    ExitCode::from(cell_runtime::EXIT_USAGE)
+                }
             }
-        },
+        }
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
-        Command::Demo { rerun, file, mut args } => {
+        Command::Demo {
+            rerun,
+            file,
+            mut args,
+        } => {
             let rerun = match rerun.split_once(':') {
-                Some(("save", dir)) => format!("save:{}", PathBuf::from(dir).join("{node}.rrd").display()),
+                Some(("save", dir)) => {
+                    format!("save:{}", PathBuf::from(dir).join("{node}.rrd").display())
+                }
                 _ => rerun,
             };
             args.insert(0, format!("rerun:={rerun}"));
@@ -131,7 +152,9 @@ fn run_launch(source: LaunchSource, args: Vec<String>, stop: Option<StopOthersWh
     }
     let file = match &source {
         LaunchSource::File(path) => LaunchFile::load(path, &pairs),
-        LaunchSource::Embedded => LaunchFile::parse(DEMO_LAUNCH, "launch_scripts/demo.launch.yaml", &pairs),
+        LaunchSource::Embedded => {
+            LaunchFile::parse(DEMO_LAUNCH, "launch_scripts/demo.launch.yaml", &pairs)
+        }
     };
     let plan = match file.and_then(|f| f.plan(resolve_exec)) {
         Ok(plan) => plan,
@@ -139,7 +162,11 @@ fn run_launch(source: LaunchSource, args: Vec<String>, stop: Option<StopOthersWh
     };
     // One id for every node's Rerun recording, so a viewer shows the run as one.
     let run_id = format!("cell-{}", std::process::id());
-    let runtime = match tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build() {
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+    {
         Ok(rt) => rt,
         Err(e) => return fail(&format!("cannot start the async runtime: {e}")),
     };
@@ -162,11 +189,20 @@ fn run_launch(source: LaunchSource, args: Vec<String>, stop: Option<StopOthersWh
                 .iter()
                 .map(|n| {
                     let status = n.status.map_or("unknown".to_string(), |s| s.to_string());
-                    format!("{} ({status}, {:.1} s{})", n.label, n.runtime.as_secs_f64(), if n.stopped { ", stopped" } else { "" })
+                    format!(
+                        "{} ({status}, {:.1} s{})",
+                        n.label,
+                        n.runtime.as_secs_f64(),
+                        if n.stopped { ", stopped" } else { "" }
+                    )
                 })
                 .collect();
             let verdict = if summary.is_success() { "ok" } else { "FAILED" };
-            println!("cell: {verdict} after {:.1} s: {}", started.elapsed().as_secs_f64(), nodes.join(", "));
+            println!(
+                "cell: {verdict} after {:.1} s: {}",
+                started.elapsed().as_secs_f64(),
+                nodes.join(", ")
+            );
             if let cell_launch::Outcome::Failed { message, .. } = &summary.outcome {
                 eprintln!("error: {message}");
             }

@@ -85,7 +85,10 @@ pub fn describe_toolpath(tp: &Toolpath) -> String {
         .segments
         .iter()
         .flat_map(|s| s.points.windows(2))
-        .map(|w| ((w[1].x - w[0].x).powi(2) + (w[1].y - w[0].y).powi(2) + (w[1].z - w[0].z).powi(2)).sqrt())
+        .map(|w| {
+            ((w[1].x - w[0].x).powi(2) + (w[1].y - w[0].y).powi(2) + (w[1].z - w[0].z).powi(2))
+                .sqrt()
+        })
         .sum();
     format!(
         "job {:?}, {} segments, {} points, {:.1} mm of path",
@@ -101,7 +104,9 @@ pub fn describe_heat_map(h: &HeatMap) -> String {
     let (min, max) = h
         .data
         .iter()
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        });
     let over = h.data.iter().filter(|v| **v > h.threshold).count();
     format!(
         "{} {}x{}, {:.1}..{:.1} {}, {} cells over {}",
@@ -115,7 +120,8 @@ pub async fn watch(node: &CellNode, p: &MonitorParams) -> anyhow::Result<Summary
     let mut heat = node.subscriber::<HeatMap>("heat_map", QosPreset::Stream)?;
     let mut status = node.subscriber::<MachineStatus>("machine_status", QosPreset::Status)?;
     let expecting = p.expect_toolpaths > 0 || p.expect_heat_maps > 0;
-    let deadline = (p.timeout_s > 0.0).then(|| tokio::time::Instant::now() + Duration::from_secs_f64(p.timeout_s));
+    let deadline = (p.timeout_s > 0.0)
+        .then(|| tokio::time::Instant::now() + Duration::from_secs_f64(p.timeout_s));
     let mut s = Summary::default();
     let rerun = node.rerun();
     loop {

@@ -82,14 +82,24 @@ fn now() -> Time {
 
 /// Points along a closed rectangle, `step_mm` apart, starting at its lower-left corner.
 fn rectangle(width: f64, height: f64, z: f64, step_mm: f64) -> Vec<Point> {
-    let corners = [(0.0, 0.0), (0.0, height), (width, height), (width, 0.0), (0.0, 0.0)];
+    let corners = [
+        (0.0, 0.0),
+        (0.0, height),
+        (width, height),
+        (width, 0.0),
+        (0.0, 0.0),
+    ];
     let mut pts = vec![Point { x: 0.0, y: 0.0, z }];
     for pair in corners.windows(2) {
         let ((x0, y0), (x1, y1)) = (pair[0], pair[1]);
         let n = ((x1 - x0).hypot(y1 - y0) / step_mm).ceil().max(1.0) as usize;
         for i in 1..=n {
             let t = i as f64 / n as f64;
-            pts.push(Point { x: x0 + t * (x1 - x0), y: y0 + t * (y1 - y0), z });
+            pts.push(Point {
+                x: x0 + t * (x1 - x0),
+                y: y0 + t * (y1 - y0),
+                z,
+            });
         }
     }
     pts
@@ -133,15 +143,30 @@ pub fn test_block(p: &ProbeParams) -> Toolpath {
     };
     let current = p.wire_current_a;
     let segments = vec![
-        segment(ToolpathSegment::KIND_LEAD, vec![pair(-lead, 0.0), pair(0.0, 0.0)], p.feed_mm_s, current),
+        segment(
+            ToolpathSegment::KIND_LEAD,
+            vec![pair(-lead, 0.0), pair(0.0, 0.0)],
+            p.feed_mm_s,
+            current,
+        ),
         segment(
             ToolpathSegment::KIND_CUT,
             root.into_iter().zip(tip).collect(),
             p.feed_mm_s,
             current,
         ),
-        segment(ToolpathSegment::KIND_LEAD, vec![pair(0.0, 0.0), pair(-lead, 0.0)], p.feed_mm_s, current),
-        segment(ToolpathSegment::KIND_TRAVEL, vec![pair(-lead, 0.0), pair(-lead, -lead)], 10.0, 0.0),
+        segment(
+            ToolpathSegment::KIND_LEAD,
+            vec![pair(0.0, 0.0), pair(-lead, 0.0)],
+            p.feed_mm_s,
+            current,
+        ),
+        segment(
+            ToolpathSegment::KIND_TRAVEL,
+            vec![pair(-lead, 0.0), pair(-lead, -lead)],
+            10.0,
+            0.0,
+        ),
     ];
     Toolpath {
         header: Header {
@@ -194,7 +219,10 @@ pub async fn run(node: CellNode, p: ProbeParams) -> anyhow::Result<()> {
         let timeout = Duration::from_secs_f64(p.wait_timeout_s);
         let n = p.wait_for_subscribers as usize;
         for (topic, ok) in [
-            (toolpaths.topic(), toolpaths.wait_for_subscribers(n, timeout).await),
+            (
+                toolpaths.topic(),
+                toolpaths.wait_for_subscribers(n, timeout).await,
+            ),
             (heat.topic(), heat.wait_for_subscribers(n, timeout).await),
         ] {
             if !ok {
@@ -203,9 +231,14 @@ pub async fn run(node: CellNode, p: ProbeParams) -> anyhow::Result<()> {
         }
     }
     let block = test_block(&p);
-    node.rerun().log_toolpath(cell_runtime::rerun_sink::toolpath_entity(&block), &block);
+    node.rerun()
+        .log_toolpath(cell_runtime::rerun_sink::toolpath_entity(&block), &block);
     toolpaths.publish(block).await?;
-    tracing::info!("published test block {:?} on {}", p.job_id, toolpaths.topic());
+    tracing::info!(
+        "published test block {:?} on {}",
+        p.job_id,
+        toolpaths.topic()
+    );
 
     let period = Duration::from_secs_f64(1.0 / p.heat_map_rate_hz.max(0.1));
     let mut ticker = tokio::time::interval(period);
@@ -219,7 +252,11 @@ pub async fn run(node: CellNode, p: ProbeParams) -> anyhow::Result<()> {
         node.rerun().log_heat_map("/sheet/heat", &frame);
         heat.publish(frame).await?;
     }
-    tracing::info!("published {} heat-map frames on {}", p.heat_map_frames, heat.topic());
+    tracing::info!(
+        "published {} heat-map frames on {}",
+        p.heat_map_frames,
+        heat.topic()
+    );
     if p.linger {
         node.shutdown().requested().await;
     }
@@ -247,7 +284,9 @@ mod tests {
         assert!((first.x - last.x).abs() < 1e-9 && (first.y - last.y).abs() < 1e-9);
         // Perimeter 2·(120+40) = 320 mm at the root, 0.75 of it at the tip.
         let length = |pts: &[Point]| -> f64 {
-            pts.windows(2).map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y)).sum()
+            pts.windows(2)
+                .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y))
+                .sum()
         };
         assert!((length(&cut.points) - 320.0).abs() < 1e-9);
         assert!((length(&cut.secondary_points) - 240.0).abs() < 1e-9);

@@ -72,7 +72,13 @@ fn percentile(sorted: &[u64], p: f64) -> f64 {
     sorted[i] as f64 / 1000.0
 }
 
-fn figures(name: &'static str, sent: usize, received: usize, elapsed: Duration, mut lat_ns: Vec<u64>) -> Figures {
+fn figures(
+    name: &'static str,
+    sent: usize,
+    received: usize,
+    elapsed: Duration,
+    mut lat_ns: Vec<u64>,
+) -> Figures {
     lat_ns.sort_unstable();
     Figures {
         name,
@@ -86,25 +92,44 @@ fn figures(name: &'static str, sent: usize, received: usize, elapsed: Duration, 
 
 /// The typed API, over DDS or the fast path.
 async fn typed(name: &'static str, fast_path: bool, domain: u16, frames: usize) -> Figures {
-    let mode = if fast_path { FastPathMode::Auto } else { FastPathMode::Off };
+    let mode = if fast_path {
+        FastPathMode::Auto
+    } else {
+        FastPathMode::Off
+    };
     let make = |n: &str| {
         let mut s = NodeSetup::local(n, domain);
         s.fast_path = mode;
         CellNode::new(s).expect("node")
     };
     let (talker, listener) = (make("bench_talker"), make("bench_listener"));
-    let mut sub = listener.subscriber::<HeatMap>("/bench/heat", QosPreset::Stream).unwrap();
-    let publisher = talker.publisher::<HeatMap>("/bench/heat", QosPreset::Stream).unwrap();
-    assert!(publisher.wait_for_subscribers(1, Duration::from_secs(30)).await, "no subscriber");
+    let mut sub = listener
+        .subscriber::<HeatMap>("/bench/heat", QosPreset::Stream)
+        .unwrap();
+    let publisher = talker
+        .publisher::<HeatMap>("/bench/heat", QosPreset::Stream)
+        .unwrap();
+    assert!(
+        publisher
+            .wait_for_subscribers(1, Duration::from_secs(30))
+            .await,
+        "no subscriber"
+    );
     // Warm up until frames flow (DDS discovery, shared-memory segment growth).
     let template = frame(1);
     loop {
         publisher.publish(template.clone()).await.unwrap();
-        if tokio::time::timeout(Duration::from_millis(200), sub.recv()).await.is_ok() {
+        if tokio::time::timeout(Duration::from_millis(200), sub.recv())
+            .await
+            .is_ok()
+        {
             break;
         }
     }
-    while tokio::time::timeout(Duration::from_millis(200), sub.recv()).await.is_ok() {}
+    while tokio::time::timeout(Duration::from_millis(200), sub.recv())
+        .await
+        .is_ok()
+    {}
 
     // Throughput: send flat out, count at the receiver.
     let received = Arc::new(AtomicU64::new(0));
@@ -125,7 +150,8 @@ async fn typed(name: &'static str, fast_path: bool, domain: u16, frames: usize) 
     }
     let mut sub = counter.await.unwrap();
     let got = received.load(Ordering::Relaxed) as usize;
-    let elapsed = Duration::from_nanos(last.load(Ordering::Relaxed).saturating_sub(start_ns).max(1));
+    let elapsed =
+        Duration::from_nanos(last.load(Ordering::Relaxed).saturating_sub(start_ns).max(1));
 
     // Latency: one frame in flight.
     let mut lat = Vec::with_capacity(frames);
@@ -171,7 +197,9 @@ fn zero_copy(domain: u16, frames: usize) -> Figures {
                         // Read in place: the first and last float, no copy.
                         let bytes = frame.bytes();
                         assert_eq!(bytes.len(), frame_len);
-                        let first = f32::from_le_bytes(bytes[prefix_len..prefix_len + 4].try_into().unwrap());
+                        let first = f32::from_le_bytes(
+                            bytes[prefix_len..prefix_len + 4].try_into().unwrap(),
+                        );
                         let last = f32::from_le_bytes(bytes[bytes.len() - 4..].try_into().unwrap());
                         assert_eq!(first, last);
                         let _ = tx.send((frame.header().sequence, latency));
@@ -195,7 +223,8 @@ fn zero_copy(domain: u16, frames: usize) -> Figures {
         let check = fp.subscriber(topic, ros_type).unwrap();
         send_one(42.0);
         let f = check.try_receive().unwrap().expect("frame");
-        let decoded: HeatMap = cell_msgs::from_cdr(f.bytes()).expect("zero-copy frame is valid CDR");
+        let decoded: HeatMap =
+            cell_msgs::from_cdr(f.bytes()).expect("zero-copy frame is valid CDR");
         assert!(decoded.data.len() == n && decoded.data.iter().all(|v| *v == 42.0));
     }
     std::thread::sleep(Duration::from_millis(100));
@@ -207,7 +236,7 @@ fn zero_copy(domain: u16, frames: usize) -> Figures {
     }
     let mut got = 0;
     let mut last_at = start;
-    while let Ok(_) = rx.recv_timeout(Duration::from_millis(500)) {
+    while rx.recv_timeout(Duration::from_millis(500)).is_ok() {
         got += 1;
         last_at = Instant::now();
     }
@@ -231,11 +260,18 @@ fn main() {
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         if a == "--frames" {
-            frames = args.next().and_then(|v| v.parse().ok()).expect("--frames N");
+            frames = args
+                .next()
+                .and_then(|v| v.parse().ok())
+                .expect("--frames N");
         }
     }
     let domain = 150 + (std::process::id() % 50) as u16;
-    let rt = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
     println!(
         "heat-map transport: {SIDE}x{SIDE} f32 frames ({:.1} MiB), {frames} frames per figure, one process, loopback",
         (SIDE * SIDE * 4) as f64 / (1024.0 * 1024.0)
@@ -264,7 +300,10 @@ fn main() {
         rt.block_on(typed("iceoryx2 typed", true, domain + 1, frames)),
         zero_copy(domain + 2, frames),
     ];
-    println!("{:<20} {:>10} {:>8} {:>12} {:>12} {:>8}", "transport", "frames/s", "loss", "p50 µs", "p99 µs", "samples");
+    println!(
+        "{:<20} {:>10} {:>8} {:>12} {:>12} {:>8}",
+        "transport", "frames/s", "loss", "p50 µs", "p99 µs", "samples"
+    );
     for r in &results {
         println!(
             "{:<20} {:>10.1} {:>7.1}% {:>12.1} {:>12.1} {:>8}",
@@ -279,6 +318,10 @@ fn main() {
     let zc = &results[2];
     println!(
         "target for iceoryx2 on one host: >= 1000 frames/s and p99 < 100 µs: {}",
-        if zc.fps >= 1000.0 && zc.p99_us < 100.0 { "met" } else { "NOT met" }
+        if zc.fps >= 1000.0 && zc.p99_us < 100.0 {
+            "met"
+        } else {
+            "NOT met"
+        }
     );
 }

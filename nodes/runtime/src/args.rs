@@ -61,7 +61,9 @@ pub enum ArgsError {
         reason: String,
     },
     /// A flag ROS 2 knows but this runtime does not support, or an unknown flag.
-    #[error("--ros-args: unsupported argument {0:?} (supported: -r, -p, --params-file, --log-level)")]
+    #[error(
+        "--ros-args: unsupported argument {0:?} (supported: -r, -p, --params-file, --log-level)"
+    )]
     Unsupported(String),
 }
 
@@ -208,7 +210,10 @@ mod tests {
             args.ros.remaps,
             [("toolpath".to_string(), "/plan/toolpath".to_string())]
         );
-        assert_eq!(args.ros.params, [("rate_hz".to_string(), "2.5".to_string())]);
+        assert_eq!(
+            args.ros.params,
+            [("rate_hz".to_string(), "2.5".to_string())]
+        );
         assert_eq!(
             args.ros.params_files,
             [PathBuf::from("config/planner.yaml")]
@@ -221,7 +226,9 @@ mod tests {
         let err = NodeArgs::parse(["--ros-args", "-p"]).unwrap_err();
         assert_eq!(err.to_string(), "--ros-args: -p needs a value");
         let err = NodeArgs::parse(["--ros-args", "-p", "rate=3"]).unwrap_err();
-        assert!(err.to_string().contains("-p \"rate=3\": expected NAME:=VALUE"));
+        assert!(err
+            .to_string()
+            .contains("-p \"rate=3\": expected NAME:=VALUE"));
         let err = NodeArgs::parse(["--ros-args", "-e", "/enclave"]).unwrap_err();
         assert!(err.to_string().contains("unsupported argument \"-e\""));
         let err = NodeArgs::parse(["--ros-args", "-r", "__ns:=cell"]).unwrap_err();
@@ -231,11 +238,17 @@ mod tests {
     #[test]
     fn resolves_names_like_rcl() {
         let remaps = vec![("/cell/heat".to_string(), "/sheet/heat".to_string())];
-        assert_eq!(resolve_topic("toolpath", "/cell", "n", &[]), "/cell/toolpath");
+        assert_eq!(
+            resolve_topic("toolpath", "/cell", "n", &[]),
+            "/cell/toolpath"
+        );
         assert_eq!(resolve_topic("/abs", "/cell", "n", &[]), "/abs");
         assert_eq!(resolve_topic("~/status", "/", "n", &[]), "/n/status");
         assert_eq!(resolve_topic("heat", "/cell", "n", &remaps), "/sheet/heat");
         let relative = vec![("heat".to_string(), "other".to_string())];
-        assert_eq!(resolve_topic("heat", "/cell", "n", &relative), "/cell/other");
+        assert_eq!(
+            resolve_topic("heat", "/cell", "n", &relative),
+            "/cell/other"
+        );
     }
 }

@@ -79,7 +79,9 @@ pub struct FastPath {
 
 impl std::fmt::Debug for FastPath {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("FastPath").field("domain_id", &self.domain_id).finish()
+        f.debug_struct("FastPath")
+            .field("domain_id", &self.domain_id)
+            .finish()
     }
 }
 
@@ -97,8 +99,16 @@ impl FastPath {
         Ok(Self { node, domain_id })
     }
 
-    fn service_name(&self, topic: &str, ros_type: &str, suffix: &str) -> Result<ServiceName, FastPathError> {
-        let name = format!("cellsuite/{}{}/{}{}", self.domain_id, topic, ros_type, suffix);
+    fn service_name(
+        &self,
+        topic: &str,
+        ros_type: &str,
+        suffix: &str,
+    ) -> Result<ServiceName, FastPathError> {
+        let name = format!(
+            "cellsuite/{}{}/{}{}",
+            self.domain_id, topic, ros_type, suffix
+        );
         ServiceName::new(&name).map_err(ice("service name"))
     }
 
@@ -106,7 +116,10 @@ impl FastPath {
         &self,
         topic: &str,
         ros_type: &str,
-    ) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<Svc, [u8], FrameHeader>, FastPathError> {
+    ) -> Result<
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<Svc, [u8], FrameHeader>,
+        FastPathError,
+    > {
         self.node
             .service_builder(&self.service_name(topic, ros_type, "")?)
             .publish_subscribe::<[u8]>()
@@ -137,7 +150,12 @@ impl FastPath {
     }
 
     /// A publisher for `topic` (fully qualified ROS name) carrying `ros_type` frames.
-    pub fn publisher(&self, topic: &str, ros_type: &str, writer_gid: [u8; 16]) -> Result<FastPublisher, FastPathError> {
+    pub fn publisher(
+        &self,
+        topic: &str,
+        ros_type: &str,
+        writer_gid: [u8; 16],
+    ) -> Result<FastPublisher, FastPathError> {
         let pubsub = self.pubsub(topic, ros_type)?;
         let publisher = pubsub
             .publisher_builder()
@@ -146,7 +164,11 @@ impl FastPath {
             .max_loaned_samples(2)
             .create()
             .map_err(ice("publisher"))?;
-        let notifier = self.event(topic, ros_type)?.notifier_builder().create().map_err(ice("notifier"))?;
+        let notifier = self
+            .event(topic, ros_type)?
+            .notifier_builder()
+            .create()
+            .map_err(ice("notifier"))?;
         Ok(FastPublisher {
             pubsub,
             publisher,
@@ -163,16 +185,26 @@ impl FastPath {
             .subscriber_builder()
             .create()
             .map_err(ice("subscriber"))?;
-        let listener = self.event(topic, ros_type)?.listener_builder().create().map_err(ice("listener"))?;
-        Ok(FastSubscriber { subscriber, listener })
+        let listener = self
+            .event(topic, ros_type)?
+            .listener_builder()
+            .create()
+            .map_err(ice("listener"))?;
+        Ok(FastSubscriber {
+            subscriber,
+            listener,
+        })
     }
 }
 
 fn check_shared_memory() -> Result<(), FastPathError> {
     let shm = std::path::Path::new("/dev/shm");
-    let meta = std::fs::metadata(shm).map_err(|e| FastPathError::NoSharedMemory(format!("/dev/shm: {e}")))?;
+    let meta = std::fs::metadata(shm)
+        .map_err(|e| FastPathError::NoSharedMemory(format!("/dev/shm: {e}")))?;
     if !meta.is_dir() || meta.permissions().readonly() {
-        return Err(FastPathError::NoSharedMemory("/dev/shm is not a writable directory".into()));
+        return Err(FastPathError::NoSharedMemory(
+            "/dev/shm is not a writable directory".into(),
+        ));
     }
     Ok(())
 }
@@ -203,19 +235,19 @@ impl FastPublisher {
     /// Lends a frame of `len` bytes in shared memory; fill it and pass it to [`Self::send`].
     /// Writing the message straight into the loan is what makes the path zero-copy.
     pub fn loan(&self, len: usize) -> Result<FrameLoan, FastPathError> {
-        let sample = self
-            .publisher
-            .loan_slice(len)
-            .map_err(|e| match e {
-                iceoryx2::port::LoanError::ExceedsMaxLoanSize => FastPathError::TooLarge(len),
-                other => ice("loan")(other),
-            })?;
+        let sample = self.publisher.loan_slice(len).map_err(|e| match e {
+            iceoryx2::port::LoanError::ExceedsMaxLoanSize => FastPathError::TooLarge(len),
+            other => ice("loan")(other),
+        })?;
         Ok(FrameLoan { sample })
     }
 
     /// Sends a filled loan and wakes the subscribers. Returns how many received it.
     pub fn send(&self, mut loan: FrameLoan) -> Result<usize, FastPathError> {
-        let sequence = self.sequence.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        let sequence = self
+            .sequence
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            + 1;
         *loan.sample.user_header_mut() = FrameHeader {
             writer_gid: self.writer_gid,
             sequence,
@@ -274,12 +306,19 @@ impl Frame {
 impl FastSubscriber {
     /// The next frame if one is waiting.
     pub fn try_receive(&self) -> Result<Option<Frame>, FastPathError> {
-        Ok(self.subscriber.receive().map_err(ice("receive"))?.map(|sample| Frame { sample }))
+        Ok(self
+            .subscriber
+            .receive()
+            .map_err(ice("receive"))?
+            .map(|sample| Frame { sample }))
     }
 
     /// Waits up to `timeout` for a publisher's wake-up (returns early on one). Spurious
     /// returns are fine: callers loop on [`Self::try_receive`].
     pub fn wait(&self, timeout: Duration) -> Result<(), FastPathError> {
-        self.listener.timed_wait(|_| {}, timeout).map(|_| ()).map_err(ice("wait"))
+        self.listener
+            .timed_wait(|_| {}, timeout)
+            .map(|_| ())
+            .map_err(ice("wait"))
     }
 }

@@ -41,8 +41,16 @@ where
     Fut: Future<Output = anyhow::Result<()>>,
 {
     let parsed = args::NodeArgs::parse(argv.clone());
-    logging::init(parsed.as_ref().ok().and_then(|a| a.ros.log_level.as_deref()));
-    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
+    logging::init(
+        parsed
+            .as_ref()
+            .ok()
+            .and_then(|a| a.ros.log_level.as_deref()),
+    );
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+    {
         Ok(rt) => rt,
         Err(e) => {
             eprintln!("error: {default_name}: cannot start the async runtime: {e}");

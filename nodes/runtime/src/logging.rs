@@ -9,7 +9,8 @@ use tracing_subscriber::EnvFilter;
 /// an error when it leaves a multicast group it never joined; those bury the cell's own
 /// messages, so rustdds is held to errors and its UDP listener is silent unless asked for
 /// (e.g. `RUST_LOG=info,rustdds=warn`).
-pub const QUIET_DEPENDENCIES: &str = "rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
+pub const QUIET_DEPENDENCIES: &str =
+    "rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
      ros2_client::distributions=error,iceoryx2=warn,re_sdk=warn";
 
 /// Installs the global subscriber: `RUST_LOG` if set (plus [`QUIET_DEPENDENCIES`] for crates it

@@ -57,7 +57,11 @@ impl Network {
         }
         let localhost_only = std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v == "1")
             || std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").is_ok_and(|v| v == "LOCALHOST");
-        Ok(if localhost_only { Network::Loopback } else { Network::All })
+        Ok(if localhost_only {
+            Network::Loopback
+        } else {
+            Network::All
+        })
     }
 }
 
@@ -162,7 +166,11 @@ impl NodeSetup {
 }
 
 fn default_run_id() -> String {
-    format!("cell-{}-{}", std::process::id(), crate::fastpath::now_ns() / 1_000_000)
+    format!(
+        "cell-{}-{}",
+        std::process::id(),
+        crate::fastpath::now_ns() / 1_000_000
+    )
 }
 
 struct NodeInner {
@@ -208,7 +216,9 @@ impl CellNode {
         let mut participant = DomainParticipantBuilder::new(setup.domain_id);
         match &setup.network {
             Network::All => {}
-            Network::Loopback => participant = participant.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]),
+            Network::Loopback => {
+                participant = participant.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)])
+            }
             Network::Only(addrs) => participant = participant.with_only_networks(addrs.clone()),
         }
         let participant = participant
@@ -216,9 +226,14 @@ impl CellNode {
             .with_context(|| format!("DDS participant on domain {}", setup.domain_id))?;
         let context = Context::from_domain_participant(participant).context("ROS 2 context")?;
         let mut ros_node = context
-            .new_node(node_name, ros2_client::NodeOptions::new().enable_rosout(true))
+            .new_node(
+                node_name,
+                ros2_client::NodeOptions::new().enable_rosout(true),
+            )
             .map_err(|e| anyhow!("creating node {name}: {e:?}"))?;
-        let spinner = ros_node.spinner().map_err(|e| anyhow!("node spinner: {e:?}"))?;
+        let spinner = ros_node
+            .spinner()
+            .map_err(|e| anyhow!("node spinner: {e:?}"))?;
         tokio::spawn(async move {
             if let Err(e) = spinner.spin().await {
                 tracing::warn!("ROS graph spinner stopped: {e:?}");
@@ -281,7 +296,12 @@ impl CellNode {
 
     /// Resolves a topic name against the namespace and the `-r` remappings.
     pub fn resolve_topic(&self, name: &str) -> String {
-        resolve_topic(name, &self.inner.namespace, &self.inner.name, &self.inner.remaps)
+        resolve_topic(
+            name,
+            &self.inner.namespace,
+            &self.inner.name,
+            &self.inner.remaps,
+        )
     }
 
     /// The node's Rerun sink (disabled unless `--rerun` asked for one).
@@ -311,7 +331,11 @@ impl CellNode {
     }
 
     pub(crate) fn with_ros_node<R>(&self, f: impl FnOnce(&mut ros2_client::Node) -> R) -> R {
-        let mut guard = self.inner.ros_node.lock().unwrap_or_else(|p| p.into_inner());
+        let mut guard = self
+            .inner
+            .ros_node
+            .lock()
+            .unwrap_or_else(|p| p.into_inner());
         f(&mut guard)
     }
 }

@@ -60,7 +60,12 @@ impl ParamSources {
     }
 
     /// Reads one ROS 2 params file and merges the sections that select this node.
-    pub fn merge_file(&mut self, path: &Path, namespace: &str, name: &str) -> Result<(), ParamsError> {
+    pub fn merge_file(
+        &mut self,
+        path: &Path,
+        namespace: &str,
+        name: &str,
+    ) -> Result<(), ParamsError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| ParamsError {
             origin: file.clone(),
@@ -142,11 +147,15 @@ impl ParamSources {
                 map.insert(part, value);
                 break;
             }
-            let entry = map.entry(part).or_insert_with(|| Value::Mapping(Mapping::new()));
+            let entry = map
+                .entry(part)
+                .or_insert_with(|| Value::Mapping(Mapping::new()));
             if !entry.is_mapping() {
                 *entry = Value::Mapping(Mapping::new());
             }
-            let Value::Mapping(next) = entry else { unreachable!("made a mapping above") };
+            let Value::Mapping(next) = entry else {
+                unreachable!("made a mapping above")
+            };
             map = next;
         }
         self.origins.insert(key.to_string(), origin.to_string());
@@ -247,7 +256,10 @@ mod tests {
         );
         let b = file("/cell/mon:\n  ros__parameters:\n    label: mine\n    limits:\n      max_current_a: 4.5\n");
         let ros = ros_with(&[a.path(), b.path()], &[("rate_hz", "2.5")]);
-        let p: Params = ParamSources::collect(&ros, "/cell", "mon").unwrap().parse().unwrap();
+        let p: Params = ParamSources::collect(&ros, "/cell", "mon")
+            .unwrap()
+            .parse()
+            .unwrap();
         assert_eq!(
             p,
             Params {
@@ -257,7 +269,10 @@ mod tests {
             }
         );
         let dotted = ros_with(&[], &[("limits.max_current_a", "3")]);
-        let p: Params = ParamSources::collect(&dotted, "/", "mon").unwrap().parse().unwrap();
+        let p: Params = ParamSources::collect(&dotted, "/", "mon")
+            .unwrap()
+            .parse()
+            .unwrap();
         assert_eq!(p.limits.max_current_a, 3.0);
     }
 
@@ -265,7 +280,10 @@ mod tests {
     fn unknown_key_names_file_and_key() {
         let f = file("mon:\n  ros__parameters:\n    rate_hz: 1.0\n    rate_hzz: 2.0\n");
         let ros = ros_with(&[f.path()], &[]);
-        let err = ParamSources::collect(&ros, "/", "mon").unwrap().parse::<Params>().unwrap_err();
+        let err = ParamSources::collect(&ros, "/", "mon")
+            .unwrap()
+            .parse::<Params>()
+            .unwrap_err();
         let text = err.to_string();
         assert!(text.contains(&f.path().display().to_string()), "{text}");
         assert!(text.contains("parameter `rate_hzz`"), "{text}");
@@ -276,24 +294,47 @@ mod tests {
     fn mistyped_value_names_key_and_source() {
         let f = file("/**:\n  ros__parameters:\n    limits: {max_current_a: lots}\n");
         let ros = ros_with(&[f.path()], &[]);
-        let err = ParamSources::collect(&ros, "/", "mon").unwrap().parse::<Params>().unwrap_err();
-        assert!(err.to_string().contains("parameter `limits.max_current_a`"), "{err}");
-        assert!(err.to_string().contains(&f.path().display().to_string()), "{err}");
+        let err = ParamSources::collect(&ros, "/", "mon")
+            .unwrap()
+            .parse::<Params>()
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("parameter `limits.max_current_a`"),
+            "{err}"
+        );
+        assert!(
+            err.to_string().contains(&f.path().display().to_string()),
+            "{err}"
+        );
         let ros = ros_with(&[], &[("rate_hz", "fast")]);
-        let err = ParamSources::collect(&ros, "/", "mon").unwrap().parse::<Params>().unwrap_err();
-        assert!(err.to_string().starts_with("-p rate_hz: parameter `rate_hz`"), "{err}");
+        let err = ParamSources::collect(&ros, "/", "mon")
+            .unwrap()
+            .parse::<Params>()
+            .unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("-p rate_hz: parameter `rate_hz`"),
+            "{err}"
+        );
     }
 
     #[test]
     fn malformed_files_are_errors_with_location() {
         let f = file("mon:\n  ros__parameters:\n    rate_hz: [1,\n");
         let err = ParamSources::collect(&ros_with(&[f.path()], &[]), "/", "mon").unwrap_err();
-        assert!(err.origin.starts_with(&f.path().display().to_string()), "{err}");
+        assert!(
+            err.origin.starts_with(&f.path().display().to_string()),
+            "{err}"
+        );
         let f = file("mon:\n  rate_hz: 1\n");
         let err = ParamSources::collect(&ros_with(&[f.path()], &[]), "/", "mon").unwrap_err();
         assert!(err.to_string().contains("no `ros__parameters:`"), "{err}");
         let missing = Path::new("/nonexistent/params.yaml");
         let err = ParamSources::collect(&ros_with(&[missing], &[]), "/", "mon").unwrap_err();
-        assert!(err.to_string().contains("/nonexistent/params.yaml: cannot read"), "{err}");
+        assert!(
+            err.to_string()
+                .contains("/nonexistent/params.yaml: cannot read"),
+            "{err}"
+        );
     }
 }

@@ -111,7 +111,8 @@ impl<T: RosMessage> Publisher<T> {
     /// memory). Counted from discovery rather than ros2-client's per-writer match table, which
     /// logs an error for every query made before the graph spinner has caught up.
     pub fn dds_subscription_count(&self) -> usize {
-        self.node.with_ros_node(|n| n.subscription_count(&self.topic))
+        self.node
+            .with_ros_node(|n| n.subscription_count(&self.topic))
     }
 
     /// Waits until at least `count` subscribers (DDS or shared memory) are matched, or `timeout`.
@@ -119,7 +120,10 @@ impl<T: RosMessage> Publisher<T> {
     pub async fn wait_for_subscribers(&self, count: usize, timeout: Duration) -> bool {
         let deadline = tokio::time::Instant::now() + timeout;
         loop {
-            let fast = self.fast.as_ref().map_or(0, FastPublisher::subscriber_count);
+            let fast = self
+                .fast
+                .as_ref()
+                .map_or(0, FastPublisher::subscriber_count);
             if self.dds_subscription_count().max(fast) >= count {
                 return true;
             }
@@ -136,7 +140,9 @@ impl<T: RosMessage> Publisher<T> {
         if let Some(fast) = &self.fast {
             let local = fast.subscriber_count();
             if local > 0 {
-                let bytes = message.encode().with_context(|| format!("encoding for {}", self.topic))?;
+                let bytes = message
+                    .encode()
+                    .with_context(|| format!("encoding for {}", self.topic))?;
                 if let Err(e) = fast.send_copy(&bytes) {
                     tracing::warn!("{}: shared-memory send failed, using DDS: {e}", self.topic);
                 } else if self.dds_subscription_count() <= local {
@@ -198,7 +204,10 @@ impl<T: RosMessage> FastSide<T> {
 
     fn decode(&self, frame: &Frame) -> Option<Received<T>> {
         let gid = frame.header().writer_gid;
-        self.local_writers.lock().unwrap_or_else(|p| p.into_inner()).insert(gid);
+        self.local_writers
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .insert(gid);
         match T::decode(frame.bytes()) {
             Ok(message) => Some(Received {
                 message,
@@ -206,14 +215,20 @@ impl<T: RosMessage> FastSide<T> {
                 writer_gid: gid,
             }),
             Err(e) => {
-                tracing::warn!("{}: dropping undecodable shared-memory frame: {e}", self.topic);
+                tracing::warn!(
+                    "{}: dropping undecodable shared-memory frame: {e}",
+                    self.topic
+                );
                 None
             }
         }
     }
 
     fn is_local_writer(&self, gid: &[u8; 16]) -> bool {
-        self.local_writers.lock().unwrap_or_else(|p| p.into_inner()).contains(gid)
+        self.local_writers
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .contains(gid)
     }
 }
 
@@ -337,12 +352,20 @@ fn forward_blocking<T>(tx: &mpsc::Sender<Received<T>>, r: Received<T>, lossy: bo
 
 impl CellNode {
     /// Creates a [`Publisher`] of `T` on `topic`.
-    pub fn publisher<T: RosMessage>(&self, topic: &str, qos: QosPreset) -> anyhow::Result<Publisher<T>> {
+    pub fn publisher<T: RosMessage>(
+        &self,
+        topic: &str,
+        qos: QosPreset,
+    ) -> anyhow::Result<Publisher<T>> {
         Publisher::new(self, topic, qos)
     }
 
     /// Creates a [`Subscriber`] of `T` on `topic`.
-    pub fn subscriber<T: RosMessage>(&self, topic: &str, qos: QosPreset) -> anyhow::Result<Subscriber<T>> {
+    pub fn subscriber<T: RosMessage>(
+        &self,
+        topic: &str,
+        qos: QosPreset,
+    ) -> anyhow::Result<Subscriber<T>> {
         Subscriber::new(self, topic, qos)
     }
 }

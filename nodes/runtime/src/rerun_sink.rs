@@ -76,7 +76,9 @@ pub struct RerunSink {
 
 impl std::fmt::Debug for RerunSink {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("RerunSink").field("enabled", &self.stream.is_some()).finish()
+        f.debug_struct("RerunSink")
+            .field("enabled", &self.stream.is_some())
+            .finish()
     }
 }
 
@@ -144,20 +146,33 @@ impl RerunSink {
                 .segments
                 .iter()
                 .filter_map(|seg| {
-                    let pts = if secondary { &seg.secondary_points } else { &seg.points };
+                    let pts = if secondary {
+                        &seg.secondary_points
+                    } else {
+                        &seg.points
+                    };
                     (!pts.is_empty()).then(|| {
-                        let strip = pts.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
+                        let strip = pts
+                            .iter()
+                            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+                            .collect();
                         (strip, segment_color(seg))
                     })
                 })
                 .unzip()
         };
         let (primary, colors) = strips(false);
-        self.report(rec.log(entity, &rerun::LineStrips3D::new(primary).with_colors(colors)));
+        self.report(rec.log(
+            entity,
+            &rerun::LineStrips3D::new(primary).with_colors(colors),
+        ));
         let (secondary, colors) = strips(true);
         if !secondary.is_empty() {
             let tip = format!("{entity}_tip");
-            self.report(rec.log(tip, &rerun::LineStrips3D::new(secondary).with_colors(colors)));
+            self.report(rec.log(
+                tip,
+                &rerun::LineStrips3D::new(secondary).with_colors(colors),
+            ));
         }
     }
 
@@ -225,7 +240,10 @@ mod tests {
     fn parses_targets() {
         assert_eq!("off".parse::<RerunTarget>().unwrap(), RerunTarget::Off);
         assert_eq!(
-            "save:out/{node}.rrd".parse::<RerunTarget>().unwrap().save_path("planner"),
+            "save:out/{node}.rrd"
+                .parse::<RerunTarget>()
+                .unwrap()
+                .save_path("planner"),
             Some(PathBuf::from("out/planner.rrd"))
         );
         assert_eq!(
@@ -234,7 +252,10 @@ mod tests {
         );
         for bad in ["", "on", "save:", "connect:", "file:x.rrd"] {
             let err = bad.parse::<RerunTarget>().unwrap_err().to_string();
-            assert!(err.contains("expected off, save:PATH or connect:HOST:PORT"), "{err}");
+            assert!(
+                err.contains("expected off, save:PATH or connect:HOST:PORT"),
+                "{err}"
+            );
         }
     }
 }
