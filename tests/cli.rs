@@ -8,9 +8,11 @@ use std::{
     process::{Command, Output},
 };
 
+/// Runs `cell` with DDS on loopback only: test discovery traffic never leaves the machine.
 fn cell(args: &[&str], domain: u16) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cell"))
         .args(args)
+        .env("CELL_DDS_NETWORK", "loopback")
         .env("ROS_DOMAIN_ID", domain.to_string())
         .env_remove("RUST_LOG")
         .output()
@@ -154,6 +156,7 @@ fn bad_ros_args_and_params_are_one_line_errors() {
 
     let out = Command::new(env!("CARGO_BIN_EXE_cell"))
         .args(["node", "monitor"])
+        .env("CELL_DDS_NETWORK", "loopback")
         .env("ROS_DOMAIN_ID", "999")
         .output()
         .unwrap();

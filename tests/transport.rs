@@ -224,3 +224,46 @@ async fn undecodable_messages_are_skipped_and_the_node_stays_up() {
         "a valid HeatMap still arrives after the junk frame"
     );
 }
+
+/// `-r __ns:=` and `-r from:=to` from the command line decide which topic a node really uses.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn remapped_topics_meet() {
+    use cell_runtime::{args::NodeArgs, CellNode, NodeSetup};
+    let domain = fresh_domain();
+    let with_args = |name: &str, args: &[&str]| {
+        let mut setup = NodeSetup::local(name, domain);
+        setup.args = NodeArgs::parse(args.iter().copied()).unwrap();
+        CellNode::new(setup).unwrap()
+    };
+    // The talker publishes "toolpath" in /cell, remapped to /plan/toolpath; the listener
+    // subscribes to "plans" in the root namespace, remapped to the same.
+    let talker = with_args(
+        "talker",
+        &[
+            "--ros-args",
+            "-r",
+            "__ns:=/cell",
+            "-r",
+            "toolpath:=/plan/toolpath",
+        ],
+    );
+    let listener = with_args("listener", &["--ros-args", "-r", "plans:=/plan/toolpath"]);
+    let bystander = node("bystander", domain, false);
+    let mut unremapped = bystander
+        .subscriber::<Toolpath>("/cell/toolpath", QosPreset::Plan)
+        .unwrap();
+    let mut sub = listener
+        .subscriber::<Toolpath>("plans", QosPreset::Plan)
+        .unwrap();
+    assert_eq!(sub.topic(), "/plan/toolpath");
+    let publisher = talker
+        .publisher::<Toolpath>("toolpath", QosPreset::Plan)
+        .unwrap();
+    assert_eq!(publisher.topic(), "/plan/toolpath");
+    let block = test_block(&ProbeParams::default());
+    let sent = block.clone();
+    let got = deliver(publisher, &mut sub, move || sent.clone()).await;
+    assert_eq!(got.message, block);
+    let stray = tokio::time::timeout(Duration::from_millis(500), unremapped.recv()).await;
+    assert!(stray.is_err(), "the un-remapped name must stay silent");
+}

@@ -139,6 +139,17 @@ macro_rules! impl_ros_message {
 }
 for_each_message!(impl_ros_message);
 
+/// ros2-client's services and actions take types marked with its `Message` trait; the orphan
+/// rule means the mark can only be made here.
+#[cfg(feature = "ros2")]
+macro_rules! impl_ros2_client_message {
+    ($($ty:ty => $name:literal),* $(,)?) => {
+        $(impl ros2_client::Message for $ty {})*
+    };
+}
+#[cfg(feature = "ros2")]
+for_each_message!(impl_ros2_client_message);
+
 #[cfg(test)]
 mod tests {
     use super::*;

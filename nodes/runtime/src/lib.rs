@@ -1,5 +1,6 @@
 //! The cellsuite node runtime: what every node is built on.
 //!
+//! - [`action`]: ROS 2 actions (goal, feedback, result, cancel) for long jobs;
 //! - [`args`]: the ROS 2 command line (`--ros-args -r … -p … --params-file …`);
 //! - [`params`]: ROS 2 parameter YAML validated into typed structs;
 //! - [`node`]: [`CellNode`], one DDS participant per node, `ROS_DOMAIN_ID`, interface binding;
@@ -9,6 +10,7 @@
 //! - [`logging`], [`shutdown`]: `tracing` set-up and clean SIGINT/SIGTERM handling;
 //! - [`run_node`]: the `main` of every node binary.
 
+pub mod action;
 pub mod args;
 pub mod fastpath;
 pub mod logging;

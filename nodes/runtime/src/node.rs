@@ -330,6 +330,10 @@ impl CellNode {
         ParticipantGuard(self.inner._context.clone())
     }
 
+    pub(crate) fn domain_participant(&self) -> ros2_client::dds::rustdds::DomainParticipant {
+        self.inner._context.domain_participant()
+    }
+
     pub(crate) fn with_ros_node<R>(&self, f: impl FnOnce(&mut ros2_client::Node) -> R) -> R {
         let mut guard = self
             .inner

@@ -1,0 +1,120 @@
+//! Job actions across nodes: a client sends a `PlanHotwire` goal, the server accepts it, streams
+//! progress feedback and returns a result carrying a Toolpath; a goal the server cannot take is
+//! rejected and the client is told so.
+
+mod common;
+
+use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
+use cell_probe::{test_block, ProbeParams};
+use cell_runtime::action::{GoalEndStatus, GoalStatusEnum};
+use common::{fresh_domain, node, DELIVERY_TIMEOUT};
+use futures::StreamExt;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
+    let domain = fresh_domain();
+    let server_node = node("planner", domain, false);
+    let client_node = node("operator", domain, false);
+    let server = server_node
+        .action_server::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
+        .unwrap();
+    let client = client_node
+        .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
+        .unwrap();
+
+    let block = test_block(&ProbeParams::default());
+    let served = block.clone();
+    let serve = tokio::spawn(async move {
+        for _ in 0..2 {
+            let handle = server.receive_new_goal().await.expect("goal");
+            let goal = server.get_new_goal(handle.clone()).expect("goal body");
+            if goal.root_chord_mm <= 0.0 {
+                server.reject_goal(handle).await.expect("reject");
+                continue;
+            }
+            let accepted = server.accept_goal(handle).await.expect("accept");
+            let executing = server
+                .start_executing_goal(accepted)
+                .await
+                .expect("execute");
+            for iteration in 1..=3u32 {
+                let feedback = PlanHotwireFeedback {
+                    iteration,
+                    total_iterations: 3,
+                    best_loss: 1.0 / iteration as f64,
+                    eta_s: (3 - iteration) as f64,
+                };
+                server
+                    .publish_feedback(executing.clone(), feedback)
+                    .await
+                    .expect("feedback");
+                tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+            }
+            let result = PlanHotwireResult {
+                success: true,
+                message: format!("planned {}", goal.job_id),
+                toolpath: served.clone(),
+                final_loss: 1.0 / 3.0,
+                baseline_loss: 1.0,
+            };
+            server
+                .send_result_response(executing, GoalEndStatus::Succeeded, result)
+                .await
+                .expect("result");
+        }
+    });
+
+    let goal = |chord: f64| PlanHotwireGoal {
+        job_id: "wing-7".into(),
+        root_airfoil: "s1223".into(),
+        root_chord_mm: chord,
+        material: "EPS".into(),
+        seed: 42,
+        ..Default::default()
+    };
+
+    assert!(
+        client_node
+            .wait_for_action_server("/plan_hotwire", DELIVERY_TIMEOUT)
+            .await,
+        "server never discovered"
+    );
+    let (_, response) = within(client.async_send_goal(goal(-1.0)))
+        .await
+        .expect("sent");
+    assert!(
+        !response.accepted,
+        "a goal with a negative chord must be rejected"
+    );
+
+    let (goal_id, response) = within(client.async_send_goal(goal(200.0)))
+        .await
+        .expect("sent");
+    assert!(response.accepted);
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    let first = within(feedback.next())
+        .await
+        .expect("stream")
+        .expect("feedback");
+    assert!(
+        first.iteration >= 1 && first.total_iterations == 3,
+        "{first:?}"
+    );
+
+    let (status, result) = within(client.async_request_result(goal_id))
+        .await
+        .expect("result");
+    assert_eq!(status, GoalStatusEnum::Succeeded);
+    assert!(result.success);
+    assert_eq!(result.message, "planned wing-7");
+    assert_eq!(result.toolpath, block);
+    within(serve).await.expect("server done");
+}
+
+/// Awaits `f`, failing the test if it takes longer than [`DELIVERY_TIMEOUT`].
+async fn within<F: std::future::Future>(f: F) -> F::Output {
+    tokio::time::timeout(DELIVERY_TIMEOUT, f)
+        .await
+        .expect("in time")
+}
