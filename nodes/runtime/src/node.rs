@@ -326,7 +326,7 @@ impl CellNode {
     /// A handle that keeps the DDS participant alive. ros2-client's graph spinner drops its
     /// context before its own readers and writers, which then log errors as they find the
     /// participant gone; holding this until the tokio runtime has dropped the spinner avoids that.
-    pub fn participant_guard(&self) -> impl Drop + Send + 'static {
+    pub fn participant_guard(&self) -> ParticipantGuard {
         ParticipantGuard(self.inner._context.clone())
     }
 
@@ -344,9 +344,5 @@ impl CellNode {
     }
 }
 
-/// See [`CellNode::participant_guard`].
-struct ParticipantGuard(#[allow(dead_code)] Context);
-
-impl Drop for ParticipantGuard {
-    fn drop(&mut self) {}
-}
+/// Keeps a node's DDS participant alive while held; see [`CellNode::participant_guard`].
+pub struct ParticipantGuard(#[allow(dead_code)] Context);
