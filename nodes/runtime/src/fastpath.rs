@@ -198,13 +198,16 @@ impl FastPath {
 }
 
 fn check_shared_memory() -> Result<(), FastPathError> {
-    let shm = std::path::Path::new("/dev/shm");
-    let meta = std::fs::metadata(shm)
-        .map_err(|e| FastPathError::NoSharedMemory(format!("/dev/shm: {e}")))?;
+    check_shared_memory_at(std::path::Path::new("/dev/shm"))
+}
+
+/// iceoryx2 keeps its segments in `shm` (`/dev/shm` on Linux); containers often lack it.
+fn check_shared_memory_at(shm: &std::path::Path) -> Result<(), FastPathError> {
+    let unavailable =
+        |why: String| FastPathError::NoSharedMemory(format!("{}: {why}", shm.display()));
+    let meta = std::fs::metadata(shm).map_err(|e| unavailable(e.to_string()))?;
     if !meta.is_dir() || meta.permissions().readonly() {
-        return Err(FastPathError::NoSharedMemory(
-            "/dev/shm is not a writable directory".into(),
-        ));
+        return Err(unavailable("not a writable directory".into()));
     }
     Ok(())
 }
@@ -320,5 +323,28 @@ impl FastSubscriber {
             .timed_wait(|_| {}, timeout)
             .map(|_| ())
             .map_err(ice("wait"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missing_or_unusable_shared_memory_is_reported_not_fatal() {
+        let err = check_shared_memory_at(std::path::Path::new("/nonexistent/shm")).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("shared memory unavailable: /nonexistent/shm:"),
+            "{err}"
+        );
+        let file = tempfile::NamedTempFile::new().unwrap();
+        let err = check_shared_memory_at(file.path()).unwrap_err();
+        assert!(
+            err.to_string().contains("not a writable directory"),
+            "{err}"
+        );
+        let dir = tempfile::tempdir().unwrap();
+        assert!(check_shared_memory_at(dir.path()).is_ok());
     }
 }
