@@ -9,10 +9,10 @@ use std::{fmt, time::Duration};
 
 use cell_msgs::{HeatMap, MachineStatus, Toolpath};
 use cell_runtime::{rerun_sink::toolpath_entity, CellNode, QosPreset, Via};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct MonitorParams {
     /// Exit 0 once this many toolpaths arrived (with `expect_heat_maps`); 0: no requirement.

@@ -13,10 +13,10 @@ use cell_msgs::{
     ToolpathSegment,
 };
 use cell_runtime::{CellNode, QosPreset};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ProbeParams {
     /// Job id stamped on the toolpath.

@@ -38,7 +38,7 @@ pub const EXIT_USAGE: u8 = 64;
 /// environment) exit with [`EXIT_USAGE`].
 pub fn run_node<P, F, Fut>(default_name: &str, argv: Vec<String>, body: F) -> ExitCode
 where
-    P: serde::de::DeserializeOwned,
+    P: serde::Serialize + serde::de::DeserializeOwned,
     F: FnOnce(CellNode, P) -> Fut,
     Fut: Future<Output = anyhow::Result<()>>,
 {
@@ -63,10 +63,10 @@ where
     let code = runtime.block_on(async {
         let node = NodeSetup::from_args(default_name, argv).and_then(|mut setup| {
             setup.shutdown = Shutdown::new().with_os_signals();
-            CellNode::new(setup)
+            CellNode::with_params::<P>(setup)
         });
-        let (node, params) = match node.and_then(|node| Ok((node.params::<P>()?, node))) {
-            Ok((params, node)) => (node, params),
+        let (node, params) = match node {
+            Ok(pair) => pair,
             Err(e) => {
                 eprintln!("error: {default_name}: {e:#}");
                 return ExitCode::from(EXIT_USAGE);

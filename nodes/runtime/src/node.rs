@@ -206,6 +206,30 @@ impl CellNode {
     /// Brings the node up: one DDS participant of its own, the ROS graph spinner, the fast path
     /// (or the reason it is off) and the Rerun sink. Must run inside a tokio runtime.
     pub fn new(setup: NodeSetup) -> anyhow::Result<Self> {
+        Self::build(setup, Vec::new())
+    }
+
+    /// Like [`CellNode::new`], and also validates the parameters into `P` and declares their
+    /// effective values (defaults included) on the ROS graph, so `ros2 param list/get` show
+    /// them. They are read once, at start-up: a remote `ros2 param set` is refused with a reason.
+    pub fn with_params<P>(setup: NodeSetup) -> anyhow::Result<(Self, P)>
+    where
+        P: serde::Serialize + DeserializeOwned,
+    {
+        let ros = &setup.args.ros;
+        let name = ros.node_name.as_deref().unwrap_or(&setup.default_name);
+        let namespace = ros.namespace.as_deref().unwrap_or("/");
+        let params: P = ParamSources::collect(ros, namespace, name)?.parse()?;
+        let effective = serde_norway::to_value(&params).context("parameters")?;
+        let mut declared = Vec::new();
+        crate::params::flatten_for_ros("", &effective, &mut declared);
+        Ok((Self::build(setup, declared)?, params))
+    }
+
+    fn build(
+        setup: NodeSetup,
+        declared: Vec<(String, ros2_client::ParameterValue)>,
+    ) -> anyhow::Result<Self> {
         let ros = &setup.args.ros;
         let name = ros.node_name.clone().unwrap_or(setup.default_name.clone());
         let namespace = ros.namespace.clone().unwrap_or_else(|| "/".to_string());
@@ -225,12 +249,25 @@ impl CellNode {
             .build()
             .with_context(|| format!("DDS participant on domain {}", setup.domain_id))?;
         let context = Context::from_domain_participant(participant).context("ROS 2 context")?;
+        let mut options = ros2_client::NodeOptions::new().enable_rosout(true);
+        for (key, value) in declared {
+            options = options.declare_parameter(&key, value);
+        }
+        // ros2-client validates the declarations too; refuse changes only once the node is up.
+        let sealed = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let seal = sealed.clone();
+        let options = options.parameter_validator(Box::new(move |key, _| {
+            if !seal.load(std::sync::atomic::Ordering::Relaxed) {
+                return Ok(());
+            }
+            Err(format!(
+                "{key} is read at start-up: restart the node with -p {key}:=... or a params file"
+            ))
+        }));
         let mut ros_node = context
-            .new_node(
-                node_name,
-                ros2_client::NodeOptions::new().enable_rosout(true),
-            )
+            .new_node(node_name, options)
             .map_err(|e| anyhow!("creating node {name}: {e:?}"))?;
+        sealed.store(true, std::sync::atomic::Ordering::Relaxed);
         let spinner = ros_node
             .spinner()
             .map_err(|e| anyhow!("node spinner: {e:?}"))?;

@@ -192,6 +192,117 @@ impl ParamSources {
     }
 }
 
+/// Flattens a parameter tree into ROS 2 parameters (`a.b.c` names, ROS types). Lists of one
+/// scalar type become typed arrays; what ROS 2 cannot type (nulls, mixed lists) is skipped.
+pub fn flatten_for_ros(
+    prefix: &str,
+    value: &Value,
+    out: &mut Vec<(String, ros2_client::ParameterValue)>,
+) {
+    use ros2_client::ParameterValue as P;
+    let key = |k: &str| {
+        if prefix.is_empty() {
+            k.to_string()
+        } else {
+            format!("{prefix}.{k}")
+        }
+    };
+    let scalar = |v: &Value| -> Option<P> {
+        match v {
+            Value::Bool(b) => Some(P::Boolean(*b)),
+            Value::Number(n) if n.is_i64() => n.as_i64().map(P::Integer),
+            Value::Number(n) => n.as_f64().map(P::Double),
+            Value::String(s) => Some(P::String(s.clone())),
+            _ => None,
+        }
+    };
+    match value {
+        Value::Mapping(map) => {
+            for (k, v) in map {
+                if let Some(k) = k.as_str() {
+                    flatten_for_ros(&key(k), v, out);
+                }
+            }
+        }
+        Value::Sequence(items) => {
+            if let Some(array) = items
+                .iter()
+                .map(scalar)
+                .collect::<Option<Vec<P>>>()
+                .and_then(typed_array)
+            {
+                out.push((prefix.to_string(), array));
+            }
+        }
+        other => {
+            if let Some(v) = scalar(other) {
+                out.push((prefix.to_string(), v));
+            }
+        }
+    }
+}
+
+/// One ROS 2 array parameter from scalars of one type (integers widen to doubles beside
+/// doubles); `None` for a mix ROS 2 cannot type.
+fn typed_array(items: Vec<ros2_client::ParameterValue>) -> Option<ros2_client::ParameterValue> {
+    use ros2_client::ParameterValue as P;
+    let all = |f: &dyn Fn(&P) -> bool| items.iter().all(f);
+    Some(match items.first() {
+        None => P::StringArray(Vec::new()),
+        Some(P::Boolean(_)) if all(&|p| matches!(p, P::Boolean(_))) => P::BooleanArray(
+            items
+                .iter()
+                .filter_map(|p| {
+                    if let P::Boolean(b) = p {
+                        Some(*b)
+                    } else {
+                        None
+                    }
+                })
+                .collect(),
+        ),
+        Some(P::Integer(_)) if all(&|p| matches!(p, P::Integer(_))) => P::IntegerArray(
+            items
+                .iter()
+                .filter_map(|p| {
+                    if let P::Integer(i) = p {
+                        Some(*i)
+                    } else {
+                        None
+                    }
+                })
+                .collect(),
+        ),
+        Some(P::Integer(_) | P::Double(_))
+            if all(&|p| matches!(p, P::Integer(_) | P::Double(_))) =>
+        {
+            P::DoubleArray(
+                items
+                    .iter()
+                    .filter_map(|p| match p {
+                        P::Double(d) => Some(*d),
+                        P::Integer(i) => Some(*i as f64),
+                        _ => None,
+                    })
+                    .collect(),
+            )
+        }
+        Some(P::String(_)) if all(&|p| matches!(p, P::String(_))) => P::StringArray(
+            items
+                .iter()
+                .filter_map(|p| {
+                    if let P::String(s) = p {
+                        Some(s.clone())
+                    } else {
+                        None
+                    }
+                })
+                .collect(),
+        ),
+        _ => return None,
+    })
+}
+
 fn unknown_field_name(message: &str) -> Option<String> {
     let rest = message.strip_prefix("unknown field `")?;
     Some(rest.split('`').next()?.to_string())
@@ -274,6 +385,29 @@ mod tests {
             .parse()
             .unwrap();
         assert_eq!(p.limits.max_current_a, 3.0);
+    }
+
+    #[test]
+    fn parameters_flatten_to_ros_types() {
+        use ros2_client::ParameterValue as P;
+        let text = "rate_hz: 2.5\nlabel: x\ncount: 3\non: true\nlimits: {max_current_a: 4.0}\n\
+                    xs: [1.0, 2]\nnames: [a, b]\nnothing: null\nmixed: [1, a]\n";
+        let v: Value = serde_norway::from_str(text).unwrap();
+        let mut out = Vec::new();
+        flatten_for_ros("", &v, &mut out);
+        let get = |k: &str| out.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+        assert_eq!(get("rate_hz"), Some(P::Double(2.5)));
+        assert_eq!(get("label"), Some(P::String("x".into())));
+        assert_eq!(get("count"), Some(P::Integer(3)));
+        assert_eq!(get("on"), Some(P::Boolean(true)));
+        assert_eq!(get("limits.max_current_a"), Some(P::Double(4.0)));
+        assert_eq!(get("xs"), Some(P::DoubleArray(vec![1.0, 2.0])));
+        assert_eq!(
+            get("names"),
+            Some(P::StringArray(vec!["a".into(), "b".into()]))
+        );
+        assert_eq!(get("nothing"), None);
+        assert_eq!(get("mixed"), None);
     }
 
     #[test]
