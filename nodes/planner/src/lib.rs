@@ -5,11 +5,18 @@
 //!   synchronise a root and a tip section point for point.
 //! - [`kerf`]: the seed 001 hot-wire kerf model (Aitchison et al.), its five inverse forms, the
 //!   constant-kerf current schedule, the wire-centre path offset and the foam/wire libraries.
+//! - [`exposure`]: seed 000's surface thermal exposure (eq. 1–5), integrated in closed form over
+//!   each wire segment, with the causal mask.
+//! - [`trajectory`]: the fixed-offset baseline path, its periodic cubic B-spline normal
+//!   displacement and the T ∩ G = ∅ feasibility test.
+//! - [`pso`]: seed 000 §IV.C particle swarm optimisation of the path for uniform exposure.
 //!
-//! Everything here is synchronous and free of ROS/DDS. The surface exposure model (seed 000),
-//! the PSO path optimiser and the planner node itself come next and build on these modules.
+//! Everything here is synchronous and free of ROS/DDS; the planner node builds on it.
 
 #![warn(missing_docs)]
 
 pub mod airfoil;
+pub mod exposure;
 pub mod kerf;
+pub mod pso;
+pub mod trajectory;

@@ -1,0 +1,448 @@
+//! Wire trajectories for the optimiser: the fixed-offset baseline, its parameterisation by a
+//! periodic cubic B-spline of normal displacements (seed 000 §IV.C) and the feasibility test
+//! T ∩ G = ∅.
+//!
+//! A trajectory is a closed polyline in mm whose last point repeats its first, anticlockwise
+//! from the trailing edge like the foil it cuts.
+
+use nalgebra::{Point2, Vector2};
+
+use crate::airfoil::{Airfoil, AirfoilError};
+use crate::kerf::{offset_polyline, KerfError};
+
+/// A rejected trajectory input.
+#[derive(Debug, thiserror::Error)]
+pub enum TrajectoryError {
+    /// A parameter is NaN, infinite or out of its domain; `name` names it.
+    #[error("{name} = {value} is invalid: must be {requirement}")]
+    InvalidParameter {
+        /// Parameter name, e.g. `offset_mm`.
+        name: String,
+        /// The value given.
+        value: f64,
+        /// The accepted domain.
+        requirement: &'static str,
+    },
+    /// The offset path could not be built.
+    #[error(transparent)]
+    Kerf(#[from] KerfError),
+    /// The offset path could not be resampled.
+    #[error(transparent)]
+    Airfoil(#[from] AirfoilError),
+}
+
+/// The usual practice, and the optimiser's starting point: the foil offset outwards by a fixed
+/// distance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Baseline {
+    points: Vec<Point2<f64>>,
+    normals: Vec<Vector2<f64>>,
+    arc: Vec<f64>,
+}
+
+impl Baseline {
+    /// `foil` resampled to `m_points` points with cosine clustering at the LE and TE
+    /// ([`Airfoil::resampled_cosine`]), then offset outwards by `offset_mm`
+    /// ([`offset_polyline`], round joins). The result starts at the TE, runs anticlockwise and
+    /// is closed (the last point repeats the first).
+    ///
+    /// Resolution: about one path point per foil point, plus the flattened round join at a
+    /// sharp trailing edge (≤ 10° per step, about 18 points), so roughly `m_points` + 20
+    /// points. Resampling the offset path instead would give exactly `m_points`, but then
+    /// the chord across the TE join cuts into the foil at coarse resolution; offsetting the
+    /// resampled foil keeps the path exactly `offset_mm` from the resampled polygon. From the
+    /// true foil the clearance is `offset_mm` less the sagitta of the resampled chords on
+    /// convex stretches (small: cosine spacing clusters points where curvature is high).
+    ///
+    /// # Errors
+    /// `offset_mm` not finite and > 0 or `m_points` < 5 (named), or a failed offset.
+    pub fn fixed_offset(
+        foil: &Airfoil,
+        offset_mm: f64,
+        m_points: usize,
+    ) -> Result<Self, TrajectoryError> {
+        if !(offset_mm.is_finite() && offset_mm > 0.0) {
+            return Err(TrajectoryError::InvalidParameter {
+                name: "offset_mm".into(),
+                value: offset_mm,
+                requirement: "finite and > 0",
+            });
+        }
+        if m_points < crate::airfoil::MIN_POINTS {
+            return Err(TrajectoryError::InvalidParameter {
+                name: "m_points".into(),
+                value: m_points as f64,
+                requirement: "at least 5",
+            });
+        }
+        let resampled = foil.resampled_cosine(m_points)?;
+        Self::from_points(offset_polyline(resampled.points(), offset_mm)?)
+    }
+
+    /// A baseline from an explicit closed path (closed here if the last point does not repeat
+    /// the first). Computes each vertex's outward unit normal — the right-hand perpendicular of
+    /// the sum of the unit directions in and out of the vertex (of the outgoing direction alone
+    /// where they cancel) — and its normalised arc length u ∈ [0, 1].
+    ///
+    /// # Errors
+    /// A non-finite point (named `points[i]`), fewer than 3 distinct points.
+    pub fn from_points(mut points: Vec<Point2<f64>>) -> Result<Self, TrajectoryError> {
+        if let Some(i) = points
+            .iter()
+            .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(TrajectoryError::InvalidParameter {
+                name: format!("points[{i}]"),
+                value: f64::NAN,
+                requirement: "finite",
+            });
+        }
+        points.dedup();
+        if points.first() != points.last() {
+            points.push(points[0]);
+        }
+        let n = points.len() - 1; // distinct vertices
+        if n < 3 {
+            return Err(TrajectoryError::InvalidParameter {
+                name: "points".into(),
+                value: n as f64,
+                requirement: "at least 3 distinct points",
+            });
+        }
+        let dir = |k: usize| (points[(k + 1) % n] - points[k % n]).normalize();
+        let mut normals = Vec::with_capacity(n + 1);
+        for k in 0..n {
+            let (d_in, d_out) = (dir(k + n - 1), dir(k));
+            let s = d_in + d_out;
+            let t = if s.norm() > 1e-12 {
+                s.normalize()
+            } else {
+                d_out
+            };
+            normals.push(Vector2::new(t.y, -t.x));
+        }
+        normals.push(normals[0]);
+        let mut arc = Vec::with_capacity(n + 1);
+        let mut s = 0.0;
+        arc.push(0.0);
+        for w in points.windows(2) {
+            s += (w[1] - w[0]).norm();
+            arc.push(s);
+        }
+        for a in &mut arc {
+            *a /= s;
+        }
+        Ok(Self {
+            points,
+            normals,
+            arc,
+        })
+    }
+
+    /// The path points (closed: the last repeats the first).
+    pub fn points(&self) -> &[Point2<f64>] {
+        &self.points
+    }
+
+    /// Outward unit normal at each point.
+    pub fn normals(&self) -> &[Vector2<f64>] {
+        &self.normals
+    }
+
+    /// Normalised arc length of each point, 0 … 1.
+    pub fn arc_positions(&self) -> &[f64] {
+        &self.arc
+    }
+}
+
+/// δ(u) of a periodic uniform cubic B-spline with control values `controls` (K ≥ 1) at
+/// u ∈ [0, 1) (any real u is wrapped): with t = u·K, k = ⌊t⌋, f = t − k,
+/// δ = B₀(f)·c_{k−1} + B₁(f)·c_k + B₂(f)·c_{k+1} + B₃(f)·c_{k+2} (indices mod K), the uniform
+/// cubic basis B₀ = (1−f)³/6, B₁ = (3f³ − 6f² + 4)/6, B₂ = (−3f³ + 3f² + 3f + 1)/6, B₃ = f³/6.
+/// C² and periodic: δ(0) = δ(1). Written here (10 lines) because the spline crates on offer
+/// are general NURBS libraries and this is all the optimiser needs. Returns 0 for no controls.
+pub fn periodic_cubic_bspline(controls: &[f64], u: f64) -> f64 {
+    if controls.is_empty() {
+        return 0.0;
+    }
+    let (idx, w) = basis(controls.len(), u);
+    (0..4).map(|q| w[q] * controls[idx[q]]).sum()
+}
+
+/// Indices and weights of the four non-zero basis functions at u (see
+/// [`periodic_cubic_bspline`]).
+fn basis(k: usize, u: f64) -> ([usize; 4], [f64; 4]) {
+    if k == 0 {
+        return ([0; 4], [0.0; 4]);
+    }
+    let t = u.rem_euclid(1.0) * k as f64;
+    let i = (t.floor() as usize).min(k - 1);
+    let f = t - i as f64;
+    let (f2, f3) = (f * f, f * f * f);
+    let w = [
+        (1.0 - f).powi(3) / 6.0,
+        (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0,
+        (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0,
+        f3 / 6.0,
+    ];
+    let idx = [(i + k - 1) % k, i, (i + 1) % k, (i + 2) % k];
+    (idx, w)
+}
+
+/// A baseline displaced along its normals by a periodic cubic B-spline of K control values
+/// (seed 000 §IV.C): vertex = baseline vertex + δ(u)·n, u its normalised arc length. The basis
+/// is precomputed, so [`Trajectory::path_into`] costs four multiply-adds per vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory {
+    baseline: Baseline,
+    k: usize,
+    idx: Vec<[usize; 4]>,
+    w: Vec<[f64; 4]>,
+}
+
+impl Trajectory {
+    /// Parameterises `baseline` with `control_points` (K) control values.
+    ///
+    /// # Errors
+    /// `control_points` < 4.
+    pub fn new(baseline: Baseline, control_points: usize) -> Result<Self, TrajectoryError> {
+        if control_points < 4 {
+            return Err(TrajectoryError::InvalidParameter {
+                name: "control_points".into(),
+                value: control_points as f64,
+                requirement: "at least 4",
+            });
+        }
+        let (idx, w) = baseline
+            .arc
+            .iter()
+            .map(|&u| basis(control_points, u))
+            .unzip();
+        Ok(Self {
+            baseline,
+            k: control_points,
+            idx,
+            w,
+        })
+    }
+
+    /// Number of control values K.
+    pub fn control_points(&self) -> usize {
+        self.k
+    }
+
+    /// The undisplaced path.
+    pub fn baseline(&self) -> &Baseline {
+        &self.baseline
+    }
+
+    /// The displaced path for `controls` (mm along the outward normal; positive moves the wire
+    /// away from the foil) into `out` (cleared first). Closed like the baseline: u = 0 and
+    /// u = 1 have the same δ and normal. Entries beyond `controls.len()` count as 0.
+    pub fn path_into(&self, controls: &[f64], out: &mut Vec<Point2<f64>>) {
+        out.clear();
+        let c = |i: usize| controls.get(i).copied().unwrap_or(0.0);
+        for (k, (p, n)) in self
+            .baseline
+            .points
+            .iter()
+            .zip(&self.baseline.normals)
+            .enumerate()
+        {
+            let (idx, w) = (self.idx[k], self.w[k]);
+            let d = w[0] * c(idx[0]) + w[1] * c(idx[1]) + w[2] * c(idx[2]) + w[3] * c(idx[3]);
+            out.push(p + n * d);
+        }
+    }
+
+    /// [`Trajectory::path_into`] into a new vector.
+    pub fn path(&self, controls: &[f64]) -> Vec<Point2<f64>> {
+        let mut out = Vec::with_capacity(self.baseline.points.len());
+        self.path_into(controls, &mut out);
+        out
+    }
+}
+
+/// Smallest distance between the polyline `path` (open, or closed by repeating its first point)
+/// and the closed polygon `outline` (closing segment implied), or 0 when they intersect or the
+/// path lies inside the outline. Segment–segment distances, not just vertices.
+/// `limit_mm`: pairs whose bounding boxes are further apart than this are skipped, so the
+/// result is exact when it is below `limit_mm` and otherwise only known to be ≥ `limit_mm`
+/// (pass `f64::INFINITY` for the exact value).
+pub fn clearance_mm(path: &[Point2<f64>], outline: &[Point2<f64>], limit_mm: f64) -> f64 {
+    let n = outline.len();
+    if path.is_empty() || n < 2 {
+        return f64::INFINITY;
+    }
+    if point_in_polygon(path[0], outline) {
+        return 0.0;
+    }
+    let mut best = limit_mm;
+    for s in path.windows(2) {
+        let (a, b) = (s[0], s[1]);
+        let (lo_x, hi_x) = (a.x.min(b.x) - best, a.x.max(b.x) + best);
+        let (lo_y, hi_y) = (a.y.min(b.y) - best, a.y.max(b.y) + best);
+        for i in 0..n {
+            let (c, d) = (outline[i], outline[(i + 1) % n]);
+            if c.x.max(d.x) < lo_x
+                || c.x.min(d.x) > hi_x
+                || c.y.max(d.y) < lo_y
+                || c.y.min(d.y) > hi_y
+            {
+                continue;
+            }
+            let dist = segment_distance(a, b, c, d);
+            if dist < best {
+                best = dist;
+                if best == 0.0 {
+                    return 0.0;
+                }
+            }
+        }
+    }
+    best
+}
+
+/// True when the closed trajectory `path` keeps at least `min_clearance_mm` from the foil
+/// `outline` and does not intersect it (T ∩ G = ∅, seed 000 §IV.C, with a margin).
+pub fn is_feasible(path: &[Point2<f64>], outline: &[Point2<f64>], min_clearance_mm: f64) -> bool {
+    let limit = min_clearance_mm.max(0.0);
+    let c = clearance_mm(path, outline, limit.max(f64::MIN_POSITIVE));
+    c >= limit && c > 0.0
+}
+
+fn point_segment_distance(p: Point2<f64>, a: Point2<f64>, b: Point2<f64>) -> f64 {
+    let ab = b - a;
+    let l2 = ab.norm_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(&ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + ab * t)).norm()
+}
+
+/// Distance between segments ab and cd; 0 when they intersect or touch.
+fn segment_distance(a: Point2<f64>, b: Point2<f64>, c: Point2<f64>, d: Point2<f64>) -> f64 {
+    let orient = |p: Point2<f64>, q: Point2<f64>, r: Point2<f64>| (q - p).perp(&(r - p));
+    let (d1, d2) = (orient(c, d, a), orient(c, d, b));
+    let (d3, d4) = (orient(a, b, c), orient(a, b, d));
+    if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 && (d1 != 0.0 || d2 != 0.0 || d3 != 0.0 || d4 != 0.0) {
+        return 0.0;
+    }
+    point_segment_distance(a, c, d)
+        .min(point_segment_distance(b, c, d))
+        .min(point_segment_distance(c, a, b))
+        .min(point_segment_distance(d, a, b))
+}
+
+/// Even–odd point-in-polygon test (closing segment implied).
+fn point_in_polygon(p: Point2<f64>, poly: &[Point2<f64>]) -> bool {
+    let n = poly.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if p.x < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn foil(name: &str, chord_mm: f64) -> Airfoil {
+        let path = format!(
+            "{}/../../config/airfoils/{name}.dat",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        Airfoil::load(path).unwrap().scaled(chord_mm).unwrap()
+    }
+
+    #[test]
+    fn bspline_partition_of_unity_and_periodicity() {
+        let c = [1.0; 7];
+        for k in 0..50 {
+            let u = k as f64 / 50.0;
+            assert!((periodic_cubic_bspline(&c, u) - 1.0).abs() < 1e-12);
+        }
+        let c: Vec<f64> = (0..8).map(|i| (i as f64).sin()).collect();
+        let (a, b) = (
+            periodic_cubic_bspline(&c, 0.0),
+            periodic_cubic_bspline(&c, 1.0),
+        );
+        assert!((a - b).abs() < 1e-12);
+        // At a knot the value is (c_{k−1} + 4 c_k + c_{k+1}) / 6.
+        let v = periodic_cubic_bspline(&c, 3.0 / 8.0);
+        assert!((v - (c[2] + 4.0 * c[3] + c[4]) / 6.0).abs() < 1e-12);
+        assert_eq!(periodic_cubic_bspline(&[], 0.3), 0.0);
+    }
+
+    #[test]
+    fn baseline_starts_at_te_is_closed_and_clear() {
+        for name in ["s1223", "clarky", "e387", "naca0012"] {
+            let f = foil(name, 200.0);
+            let b = Baseline::fixed_offset(&f, 0.5, 100).unwrap();
+            let p = b.points();
+            assert!((100..=130).contains(&p.len()), "{name}: {} points", p.len());
+            assert_eq!(p.first(), p.last());
+            assert!(
+                nalgebra::distance(&p[0], &f.trailing_edge()) < 1.0,
+                "{name}"
+            );
+            let c = clearance_mm(p, f.points(), f64::INFINITY);
+            assert!(c > 0.3 && c <= 0.5 + 1e-9, "{name}: clearance {c}");
+            // Outward normals: displacing by +0.2 mm increases the clearance.
+            let t = Trajectory::new(b.clone(), 32).unwrap();
+            let out = t.path(&[0.2; 32]);
+            assert!(
+                clearance_mm(&out, f.points(), f64::INFINITY) > c + 0.15,
+                "{name}"
+            );
+            assert_eq!(t.path(&[0.0; 32]), p.to_vec());
+        }
+    }
+
+    #[test]
+    fn intersecting_path_is_infeasible() {
+        let f = foil("clarky", 200.0);
+        let b = Baseline::fixed_offset(&f, 0.5, 100).unwrap();
+        let t = Trajectory::new(b, 32).unwrap();
+        assert!(is_feasible(&t.path(&[0.0; 32]), f.points(), 0.1));
+        // Pull one stretch 2 mm inwards: it crosses the surface.
+        let mut c = [0.0; 32];
+        c[10] = -2.0;
+        let bad = t.path(&c);
+        assert_eq!(clearance_mm(&bad, f.points(), f64::INFINITY), 0.0);
+        assert!(!is_feasible(&bad, f.points(), 0.1));
+        // 0.45 mm inwards everywhere: no crossing, but closer than 0.1 mm.
+        let close = t.path(&[-0.45; 32]);
+        assert!(!is_feasible(&close, f.points(), 0.1));
+        // Entirely inside the foil: no crossing either, still infeasible.
+        let inside: Vec<_> = f
+            .points()
+            .iter()
+            .map(|p| nalgebra::center(p, &Point2::new(100.0, 2.0)))
+            .collect();
+        assert_eq!(clearance_mm(&inside, f.points(), f64::INFINITY), 0.0);
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let f = foil("e387", 100.0);
+        let e = Baseline::fixed_offset(&f, -1.0, 50).unwrap_err();
+        assert!(e.to_string().starts_with("offset_mm"), "{e}");
+        let e = Baseline::fixed_offset(&f, 0.5, 3).unwrap_err();
+        assert!(e.to_string().starts_with("m_points"), "{e}");
+        let b = Baseline::fixed_offset(&f, 0.5, 50).unwrap();
+        let e = Trajectory::new(b, 2).unwrap_err();
+        assert!(e.to_string().starts_with("control_points"), "{e}");
+        let e = Baseline::from_points(vec![Point2::new(f64::NAN, 0.0); 4]).unwrap_err();
+        assert!(e.to_string().starts_with("points[0]"), "{e}");
+    }
+}
