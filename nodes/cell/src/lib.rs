@@ -6,6 +6,10 @@
 //!   binary, so it works from any directory).
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
+//! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR` plans one hot-wire cut on the spot
+//!   (no DDS) and writes `trajectory.csv` and `report.json` (see [`hotwire`]).
+
+pub mod hotwire;
 
 use std::{path::PathBuf, process::ExitCode};
 
@@ -24,6 +28,7 @@ type BuiltinMain = fn(Vec<String>) -> ExitCode;
 pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("cell_probe", cell_probe::main),
     ("monitor", cell_monitor::main),
+    ("planner", cell_planner::node::main),
 ];
 
 #[derive(Parser, Debug)]
@@ -59,6 +64,8 @@ enum Command {
         #[arg(value_name = "NAME:=VALUE")]
         args: Vec<String>,
     },
+    /// Plan one hot-wire cut without DDS: write DIR/trajectory.csv and DIR/report.json.
+    Hotwire(hotwire::HotwireArgs),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
     Node {
         /// The node's exec name.
@@ -110,6 +117,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
                 }
             }
         }
+        Command::Hotwire(args) => hotwire::run(args),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
             rerun,

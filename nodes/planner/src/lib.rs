@@ -10,13 +10,18 @@
 //! - [`trajectory`]: the fixed-offset baseline path, its periodic cubic B-spline normal
 //!   displacement and the T ∩ G = ∅ feasibility test.
 //! - [`pso`]: seed 000 §IV.C particle swarm optimisation of the path for uniform exposure.
+//! - [`job`]: one planning job end to end (foil → offset → baseline → swarm → plan), with its
+//!   `Toolpath` and `HeatMap` views.
+//! - [`node`]: the `planner` ROS 2 node serving the `plan_hotwire` action.
 //!
-//! Everything here is synchronous and free of ROS/DDS; the planner node builds on it.
+//! Everything but [`node`] is synchronous and free of ROS/DDS; the planner node builds on it.
 
 #![warn(missing_docs)]
 
 pub mod airfoil;
 pub mod exposure;
+pub mod job;
 pub mod kerf;
+pub mod node;
 pub mod pso;
 pub mod trajectory;
