@@ -19,6 +19,7 @@ use std::ops::ControlFlow;
 use nalgebra::Point2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use crate::airfoil::{Airfoil, AirfoilError};
 use crate::exposure::{ExposureError, ExposureModel, Panels, WireSegments};
@@ -399,6 +400,8 @@ pub fn optimise(
     let mut history = vec![(0, g_loss)];
     let mut cancelled = false;
     let mut iterations_run = 0;
+    let mut scratches: Vec<Scratch> = (0..config.particles).map(|_| Scratch::default()).collect();
+    let mut losses = vec![f64::INFINITY; config.particles];
     for it in 1..=config.iterations {
         if config.restart_every > 0 && it > 1 && (it - 1) % config.restart_every == 0 {
             for p in 0..config.particles {
@@ -408,6 +411,9 @@ pub fn optimise(
                 p_loss[p] = g_loss;
             }
         }
+        // Move every particle (random draws in a fixed order, so a seed gives one result),
+        // evaluate them in parallel, then update the bests in particle order. This is the
+        // synchronous PSO variant: a particle sees the global best of the previous iteration.
         for p in 0..config.particles {
             for d in 0..k {
                 let (r1, r2): (f64, f64) = (rng.random(), rng.random());
@@ -416,7 +422,13 @@ pub fn optimise(
                     + config.social * r2 * (g_best[d] - x[p][d]);
                 x[p][d] += v[p][d];
             }
-            let l = problem.loss(&x[p], &mut scratch);
+        }
+        x.par_iter()
+            .zip(scratches.par_iter_mut())
+            .zip(losses.par_iter_mut())
+            .for_each(|((xp, scratch), loss)| *loss = problem.loss(xp, scratch));
+        for p in 0..config.particles {
+            let l = losses[p];
             if l < p_loss[p] {
                 p_loss[p] = l;
                 p_best[p].clone_from(&x[p]);
