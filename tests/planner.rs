@@ -155,6 +155,10 @@ fn cell_hotwire_writes_trajectory_and_report() {
         .iter()
         .all(|r| r.len() == 4 && r.iter().all(|v| v.is_finite())));
     assert!(rows.iter().all(|r| r[2] > 0.0 && r[3] > 0.0));
+    assert!(
+        rows.windows(2).all(|w| w[0][..2] != w[1][..2]),
+        "no zero-length moves: consecutive rows repeat a point"
+    );
 
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();

@@ -99,7 +99,8 @@ pub fn job_from_args(a: &HotwireArgs) -> HotwireJob {
     }
 }
 
-/// The trajectory CSV: lead-in, cut, lead-out.
+/// The trajectory CSV: lead-in, cut, lead-out. Where one part ends on the point the next begins
+/// with, the point is written once (a repeated row is a zero-length move for a controller).
 pub fn trajectory_csv(plan: &HotwirePlan) -> String {
     let mut out = String::from("x_mm,y_mm,feed_mm_s,current_a\n");
     let (f, a) = (plan.lead_feed_mm_s, plan.lead_current_a);
@@ -110,7 +111,12 @@ pub fn trajectory_csv(plan: &HotwirePlan) -> String {
         .zip(plan.feed_mm_s.iter().zip(&plan.current_a))
         .map(|(p, (&f, &a))| (p, f, a));
     let lead_out = plan.lead_out.iter().map(|p| (p, f, a));
+    let mut previous = None;
     for (p, f, a) in lead_in.chain(cut).chain(lead_out) {
+        if previous == Some(*p) {
+            continue;
+        }
+        previous = Some(*p);
         let _ = writeln!(out, "{:.6},{:.6},{f:.4},{a:.4}", p.x, p.y);
     }
     out
