@@ -642,6 +642,16 @@ fn sample_by_x(local: &[Point2<f64>], xs: &[f64]) -> Vec<Point2<f64>> {
         .collect()
 }
 
+/// A shipped foil from `config/airfoils`, scaled to `chord_mm`, for tests across the crate.
+#[cfg(test)]
+pub(crate) fn test_foil(name: &str, chord_mm: f64) -> Airfoil {
+    let path = format!(
+        "{}/../../config/airfoils/{name}.dat",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    Airfoil::load(path).unwrap().scaled(chord_mm).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

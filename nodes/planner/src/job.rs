@@ -568,16 +568,6 @@ fn surface_points(foil: &Airfoil, panels: usize) -> Result<usize, JobError> {
     })
 }
 
-fn now() -> Time {
-    let d = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default();
-    Time {
-        sec: d.as_secs() as i32,
-        nanosec: d.subsec_nanos(),
-    }
-}
-
 fn point(p: &Point2<f64>) -> Point {
     Point {
         x: p.x,
@@ -614,7 +604,7 @@ impl HotwirePlan {
         };
         Toolpath {
             header: Header {
-                stamp: now(),
+                stamp: Time::now(),
                 frame_id: FRAME_ID.into(),
             },
             job_id: job_id.into(),
@@ -672,7 +662,7 @@ fn heat_map(
 ) -> HeatMap {
     HeatMap {
         header: Header {
-            stamp: now(),
+            stamp: Time::now(),
             frame_id: FRAME_ID.into(),
         },
         quantity: quantity.into(),

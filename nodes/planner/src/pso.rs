@@ -465,13 +465,7 @@ mod tests {
     use super::*;
     use crate::exposure::coefficient_of_variation;
 
-    fn foil(name: &str, chord_mm: f64) -> Airfoil {
-        let path = format!(
-            "{}/../../config/airfoils/{name}.dat",
-            env!("CARGO_MANIFEST_DIR")
-        );
-        Airfoil::load(path).unwrap().scaled(chord_mm).unwrap()
-    }
+    use crate::airfoil::test_foil as foil;
 
     /// S1223-style test problem at test sizes (N = 60, about 100 path points). The author's
     /// 1/‖R‖² law: its exposure is near-field dominated, so moving the path by tenths of a

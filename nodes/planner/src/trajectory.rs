@@ -356,13 +356,7 @@ fn point_in_polygon(p: Point2<f64>, poly: &[Point2<f64>]) -> bool {
 mod tests {
     use super::*;
 
-    fn foil(name: &str, chord_mm: f64) -> Airfoil {
-        let path = format!(
-            "{}/../../config/airfoils/{name}.dat",
-            env!("CARGO_MANIFEST_DIR")
-        );
-        Airfoil::load(path).unwrap().scaled(chord_mm).unwrap()
-    }
+    use crate::airfoil::test_foil as foil;
 
     #[test]
     fn bspline_partition_of_unity_and_periodicity() {

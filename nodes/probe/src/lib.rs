@@ -70,16 +70,6 @@ impl Default for ProbeParams {
     }
 }
 
-fn now() -> Time {
-    let d = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default();
-    Time {
-        sec: d.as_secs() as i32,
-        nanosec: d.subsec_nanos(),
-    }
-}
-
 /// Points along a closed rectangle, `step_mm` apart, starting at its lower-left corner.
 fn rectangle(width: f64, height: f64, z: f64, step_mm: f64) -> Vec<Point> {
     let corners = [
@@ -170,7 +160,7 @@ pub fn test_block(p: &ProbeParams) -> Toolpath {
     ];
     Toolpath {
         header: Header {
-            stamp: now(),
+            stamp: Time::now(),
             frame_id: "cell".into(),
         },
         job_id: p.job_id.clone(),
@@ -196,7 +186,7 @@ pub fn hot_spot(width: u32, height: u32, index: u32) -> HeatMap {
     }
     HeatMap {
         header: Header {
-            stamp: now(),
+            stamp: Time::now(),
             frame_id: "sheet".into(),
         },
         quantity: "sheet_temperature".into(),

@@ -87,6 +87,14 @@ impl CellNode {
         }
     }
 
+    /// `name` resolved against namespace and remappings, as text and as a ROS name.
+    fn action_name(&self, name: &str) -> anyhow::Result<(String, Name)> {
+        let resolved = self.resolve_topic(name);
+        let parsed =
+            Name::parse(&resolved).map_err(|e| anyhow!("action name {resolved:?}: {e:?}"))?;
+        Ok((resolved, parsed))
+    }
+
     /// Serves the action `name` (resolved against namespace and remappings) with goal type `G`,
     /// result `R` and feedback `F`.
     pub fn action_server<G, R, F>(&self, name: &str) -> anyhow::Result<AsyncActionServer<G, R, F>>
@@ -95,9 +103,7 @@ impl CellNode {
         R: RosMessage + ros2_client::Message,
         F: RosMessage + ros2_client::Message,
     {
-        let resolved = self.resolve_topic(name);
-        let action_name =
-            Name::parse(&resolved).map_err(|e| anyhow!("action name {resolved:?}: {e:?}"))?;
+        let (resolved, action_name) = self.action_name(name)?;
         let (service, feedback, status) = qos();
         let policies = ActionServerQosPolicies {
             goal_service: service.clone(),
@@ -127,9 +133,7 @@ impl CellNode {
         R: RosMessage + ros2_client::Message,
         F: RosMessage + ros2_client::Message,
     {
-        let resolved = self.resolve_topic(name);
-        let action_name =
-            Name::parse(&resolved).map_err(|e| anyhow!("action name {resolved:?}: {e:?}"))?;
+        let (resolved, action_name) = self.action_name(name)?;
         let (service, feedback, status) = qos();
         let policies = ActionClientQosPolicies {
             goal_service: service.clone(),
