@@ -102,9 +102,14 @@ async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
         "{first:?}"
     );
 
-    let (status, result) = within(client.async_request_result(goal_id))
-        .await
-        .expect("result");
+    let (status, result) = cell_runtime::action::request_result(
+        &client,
+        goal_id,
+        std::time::Duration::from_secs(3),
+        DELIVERY_TIMEOUT,
+    )
+    .await
+    .expect("result");
     assert_eq!(status, GoalStatusEnum::Succeeded);
     assert!(result.success);
     assert_eq!(result.message, "planned wing-7");

@@ -77,9 +77,14 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
         "{first:?}"
     );
 
-    let (status, result) = within(client.async_request_result(goal_id))
-        .await
-        .expect("result");
+    let (status, result) = cell_runtime::action::request_result(
+        &client,
+        goal_id,
+        std::time::Duration::from_secs(3),
+        DELIVERY_TIMEOUT,
+    )
+    .await
+    .expect("result");
     assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
     assert!(result.success, "{}", result.message);
     assert!(result.final_loss <= result.baseline_loss, "{result:?}");

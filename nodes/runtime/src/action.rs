@@ -16,7 +16,42 @@ use ros2_client::{
 use crate::node::CellNode;
 
 pub use ros2_client::action::{ActionClient, AsyncActionServer, GoalEndStatus};
-pub use ros2_client::action_msgs::GoalStatusEnum;
+pub use ros2_client::action_msgs::{GoalId, GoalStatusEnum};
+
+/// Asks for a goal's result, asking again every `retry_every` until `timeout`.
+///
+/// ROS 2 services are volatile: a reply the server sends before it has matched our reply reader
+/// is lost, and the call would wait forever. Asking for a result is idempotent, so asking again
+/// is safe; each retry is logged.
+pub async fn request_result<G, R, F>(
+    client: &ActionClient<G, R, F>,
+    goal_id: GoalId,
+    retry_every: std::time::Duration,
+    timeout: std::time::Duration,
+) -> anyhow::Result<(GoalStatusEnum, R)>
+where
+    G: ros2_client::Message + Clone + 'static,
+    R: ros2_client::Message + Clone + 'static,
+    F: ros2_client::Message + 'static,
+{
+    let deadline = tokio::time::Instant::now() + timeout;
+    loop {
+        let attempt =
+            retry_every.min(deadline.saturating_duration_since(tokio::time::Instant::now()));
+        match tokio::time::timeout(attempt, client.async_request_result(goal_id)).await {
+            Ok(Ok(answer)) => return Ok(answer),
+            Ok(Err(e)) => return Err(anyhow!("result of goal {goal_id:?}: {e:?}")),
+            Err(_) if tokio::time::Instant::now() < deadline => {
+                tracing::debug!("no result for goal {goal_id:?} yet; asking again");
+            }
+            Err(_) => return Err(anyhow!("no result for goal {goal_id:?} within {timeout:?}")),
+        }
+    }
+}
+
+/// How long [`CellNode::wait_for_action_server`] waits after discovering a server, for the
+/// server to discover us.
+pub const SERVER_MATCH_SETTLE: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// `cell_msgs/action/PlanHotwire` from the goal type `cell_msgs/action/PlanHotwire_Goal`.
 fn action_type<G: RosMessage>() -> anyhow::Result<ActionTypeName> {
@@ -75,9 +110,10 @@ impl CellNode {
             if readers.iter().all(|r| found_readers.contains(r))
                 && writers.iter().all(|w| found_writers.contains(w))
             {
-                // Discovery is symmetric but not simultaneous: give the server a moment to
-                // match our readers too, so its replies are not sent into the void.
-                tokio::time::sleep(std::time::Duration::from_millis(200)).await;
+                // Discovery is symmetric but not simultaneous: give the server time to match
+                // our readers too, or its first replies are lost (volatile services). On a
+                // loaded 2-core machine 200 ms was seen to be too short.
+                tokio::time::sleep(SERVER_MATCH_SETTLE).await;
                 return true;
             }
             if tokio::time::Instant::now() >= deadline {
