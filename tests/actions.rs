@@ -7,8 +7,7 @@ mod common;
 use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
 use cell_probe::{test_block, ProbeParams};
 use cell_runtime::action::{GoalEndStatus, GoalStatusEnum};
-use common::{fresh_domain, node, DELIVERY_TIMEOUT};
-use futures::StreamExt;
+use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
@@ -79,47 +78,25 @@ async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
             .await,
         "server never discovered"
     );
-    let (_, response) = within(client.async_send_goal(goal(-1.0)))
-        .await
-        .expect("sent");
     assert!(
-        !response.accepted,
+        follow_goal(&client, goal(-1.0)).await.is_none(),
         "a goal with a negative chord must be rejected"
     );
 
-    let (goal_id, response) = within(client.async_send_goal(goal(200.0)))
+    let FollowedGoal {
+        first_feedback: first,
+        status,
+        result,
+    } = follow_goal(&client, goal(200.0))
         .await
-        .expect("sent");
-    assert!(response.accepted);
-    let feedback = client.feedback_stream(goal_id);
-    let mut feedback = std::pin::pin!(feedback);
-    let first = within(feedback.next())
-        .await
-        .expect("stream")
-        .expect("feedback");
+        .expect("the goal is accepted");
     assert!(
         first.iteration >= 1 && first.total_iterations == 3,
         "{first:?}"
     );
-
-    let (status, result) = cell_runtime::action::request_result(
-        &client,
-        goal_id,
-        std::time::Duration::from_secs(3),
-        DELIVERY_TIMEOUT,
-    )
-    .await
-    .expect("result");
     assert_eq!(status, GoalStatusEnum::Succeeded);
     assert!(result.success);
     assert_eq!(result.message, "planned wing-7");
     assert_eq!(result.toolpath, block);
     within(serve).await.expect("server done");
-}
-
-/// Awaits `f`, failing the test if it takes longer than [`DELIVERY_TIMEOUT`].
-async fn within<F: std::future::Future>(f: F) -> F::Output {
-    tokio::time::timeout(DELIVERY_TIMEOUT, f)
-        .await
-        .expect("in time")
 }

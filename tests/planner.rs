@@ -9,15 +9,7 @@ use cell_msgs::{
 };
 use cell_planner::node::{run, PlannerParams};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
-use common::{fresh_domain, node, DELIVERY_TIMEOUT};
-use futures::StreamExt;
-
-/// Awaits `f`, failing the test if it takes longer than [`DELIVERY_TIMEOUT`].
-async fn within<F: std::future::Future>(f: F) -> F::Output {
-    tokio::time::timeout(DELIVERY_TIMEOUT, f)
-        .await
-        .expect("in time")
-}
+use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
@@ -57,34 +49,22 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
     };
 
     // A bad goal first: rejected, and the node keeps serving.
-    let (_, response) = within(client.async_send_goal(goal(0.0, "bad")))
-        .await
-        .expect("sent");
-    assert!(!response.accepted, "a goal with chord 0 must be rejected");
+    assert!(
+        follow_goal(&client, goal(0.0, "bad")).await.is_none(),
+        "a goal with chord 0 must be rejected"
+    );
 
-    let (goal_id, response) = within(client.async_send_goal(goal(150.0, "wing-1")))
+    let FollowedGoal {
+        first_feedback: first,
+        status,
+        result,
+    } = follow_goal(&client, goal(150.0, "wing-1"))
         .await
-        .expect("sent");
-    assert!(response.accepted);
-    let feedback = client.feedback_stream(goal_id);
-    let mut feedback = std::pin::pin!(feedback);
-    let first = within(feedback.next())
-        .await
-        .expect("stream")
-        .expect("feedback");
+        .expect("the goal is accepted");
     assert!(
         first.iteration >= 1 && first.total_iterations == 60,
         "{first:?}"
     );
-
-    let (status, result) = cell_runtime::action::request_result(
-        &client,
-        goal_id,
-        std::time::Duration::from_secs(3),
-        DELIVERY_TIMEOUT,
-    )
-    .await
-    .expect("result");
     assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
     assert!(result.success, "{}", result.message);
     assert!(result.final_loss <= result.baseline_loss, "{result:?}");
@@ -112,10 +92,7 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
     assert_eq!(published.message.segments, tp.segments);
 
     // Still serving after the rejected and the planned goal.
-    let (_, response) = within(client.async_send_goal(goal(-5.0, "bad-2")))
-        .await
-        .expect("sent");
-    assert!(!response.accepted);
+    assert!(follow_goal(&client, goal(-5.0, "bad-2")).await.is_none());
     assert!(!planner.is_finished(), "the planner node must stay up");
     planner.abort();
 }

@@ -30,3 +30,57 @@ pub fn node(name: &str, domain: u16, fast_path: bool) -> CellNode {
 
 /// Generous bound for discovery and delivery on a loaded 2-core machine.
 pub const DELIVERY_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// Awaits `f`, failing the test if it takes longer than [`DELIVERY_TIMEOUT`].
+pub async fn within<F: std::future::Future>(f: F) -> F::Output {
+    tokio::time::timeout(DELIVERY_TIMEOUT, f)
+        .await
+        .expect("in time")
+}
+
+/// What an action client saw of one accepted goal.
+pub struct FollowedGoal<F, R> {
+    /// The first feedback message.
+    pub first_feedback: F,
+    /// The goal's final status.
+    pub status: cell_runtime::action::GoalStatusEnum,
+    /// The goal's result.
+    pub result: R,
+}
+
+/// Sends `goal`; if the server accepts it, waits for its first feedback and then its result.
+/// `None` when the server rejects the goal.
+pub async fn follow_goal<G, R, F>(
+    client: &cell_runtime::action::ActionClient<G, R, F>,
+    goal: G,
+) -> Option<FollowedGoal<F, R>>
+where
+    G: ros2_client::Message + Clone + 'static,
+    R: ros2_client::Message + Clone + 'static,
+    F: ros2_client::Message + 'static,
+{
+    use futures::StreamExt;
+    let (goal_id, response) = within(client.async_send_goal(goal)).await.expect("sent");
+    if !response.accepted {
+        return None;
+    }
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    let first_feedback = within(feedback.next())
+        .await
+        .expect("stream")
+        .expect("feedback");
+    let (status, result) = cell_runtime::action::request_result(
+        client,
+        goal_id,
+        std::time::Duration::from_secs(3),
+        DELIVERY_TIMEOUT,
+    )
+    .await
+    .expect("result");
+    Some(FollowedGoal {
+        first_feedback,
+        status,
+        result,
+    })
+}
