@@ -91,7 +91,62 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
     assert_eq!(published.message.job_id, "wing-1");
     assert_eq!(published.message.segments, tp.segments);
 
-    // Still serving after the rejected and the planned goal.
+    // A tapered, swept, twisted panel: both carriage planes in the toolpath.
+    let tapered = PlanHotwireGoal {
+        tip_airfoil: "e387".into(),
+        tip_chord_mm: 120.0,
+        tip_sweep_mm: 30.0,
+        tip_twist_deg: -2.0,
+        span_mm: 400.0,
+        iterations: 20,
+        ..goal(180.0, "panel-1")
+    };
+    let FollowedGoal { status, result, .. } =
+        follow_goal(&client, tapered).await.expect("accepted");
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert!(result.message.contains("tip E387"), "{}", result.message);
+    let cut = &result.toolpath.segments[1];
+    assert_eq!(result.toolpath.plane_separation_mm, 1000.0);
+    assert_eq!(cut.secondary_points.len(), cut.points.len());
+    assert!(cut
+        .points
+        .iter()
+        .zip(&cut.secondary_points)
+        .any(|(p, s)| (p.x - s.x).abs() > 1.0));
+
+    // A long goal, cancelled after its first feedback: it ends as canceled, promptly.
+    {
+        use futures::StreamExt;
+        let long = PlanHotwireGoal {
+            iterations: 1_000_000,
+            ..goal(150.0, "long-1")
+        };
+        let (goal_id, response) = within(client.async_send_goal(long)).await.expect("sent");
+        assert!(response.accepted);
+        let feedback = client.feedback_stream(goal_id);
+        let mut feedback = std::pin::pin!(feedback);
+        within(feedback.next())
+            .await
+            .expect("feedback")
+            .expect("a feedback message");
+        let cancel =
+            within(client.async_cancel_goal(goal_id, ros2_client::builtin_interfaces::Time::ZERO))
+                .await
+                .expect("cancel answered");
+        assert_eq!(cancel.goals_canceling.len(), 1, "{cancel:?}");
+        let (status, result) = cell_runtime::action::request_result(
+            &client,
+            goal_id,
+            std::time::Duration::from_secs(3),
+            DELIVERY_TIMEOUT,
+        )
+        .await
+        .expect("result");
+        assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
+        assert!(!result.success && result.message.contains("cancelled after"));
+    }
+
+    // Still serving after the rejected, the planned and the cancelled goals.
     assert!(follow_goal(&client, goal(-5.0, "bad-2")).await.is_none());
     assert!(!planner.is_finished(), "the planner node must stay up");
     planner.abort();
@@ -128,17 +183,22 @@ fn cell_hotwire_writes_trajectory_and_report() {
 
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("x_mm,y_mm,feed_mm_s,current_a"));
+    // The default machine is the 4-axis hotwire_xyuv: carriage columns x,y,u,v.
+    assert_eq!(
+        lines.next(),
+        Some("x_mm,y_mm,u_mm,v_mm,feed_mm_s,current_a")
+    );
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
     assert!(rows.len() > 40);
     assert!(rows
         .iter()
-        .all(|r| r.len() == 4 && r.iter().all(|v| v.is_finite())));
-    assert!(rows.iter().all(|r| r[2] > 0.0 && r[3] > 0.0));
+        .all(|r| r.len() == 6 && r.iter().all(|v| v.is_finite())));
+    assert!(rows.iter().all(|r| r[4] > 0.0 && r[5] > 0.0));
+    assert!(rows.iter().all(|r| r[..2] == r[2..4]), "a straight cut");
     assert!(
-        rows.windows(2).all(|w| w[0][..2] != w[1][..2]),
+        rows.windows(2).all(|w| w[0][..4] != w[1][..4]),
         "no zero-length moves: consecutive rows repeat a point"
     );
 
@@ -152,6 +212,81 @@ fn cell_hotwire_writes_trajectory_and_report() {
     assert_eq!(report["chord_mm"], 150.0);
     assert!(report["material"].is_string());
     assert!(report["baseline"]["cv"].is_number() && report["seconds"].is_number());
+}
+
+#[test]
+fn cell_hotwire_plans_a_tapered_panel_and_refuses_it_on_a_two_axis_machine() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let args = [
+        "hotwire",
+        "--airfoil",
+        "s1223",
+        "--chord",
+        "200",
+        "--tip",
+        "e387",
+        "--tip-chord",
+        "120",
+        "--tip-sweep",
+        "40",
+        "--tip-twist",
+        "-3",
+        "--span",
+        "400",
+        "--material",
+        "EPS",
+        "--panels",
+        "40",
+        "--iterations",
+        "20",
+        "--particles",
+        "6",
+        "--out",
+    ];
+    let run = std::process::Command::new(CELL)
+        .args(args)
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["machine"], "hotwire_xyuv");
+    assert_eq!(report["tip"]["chord_mm"], 120.0);
+    assert_eq!(report["iterations"], 40, "root and tip sections");
+    assert!(report["tip"]["offset_mm"].as_f64() > report["offset_mm"].as_f64());
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    // Swept back and smaller: the UV carriage runs a different, shorter path.
+    assert!(rows.iter().any(|r| (r[0] - r[2]).abs() > 5.0));
+    let (x_span, u_span) = rows
+        .iter()
+        .fold((0.0f64, 0.0f64), |(x, u), r| (x.max(r[0]), u.max(r[2])));
+    assert!(x_span > 0.0 && u_span > 0.0);
+    assert!(
+        rows.iter().all(|r| r[4] <= 25.0 + 1e-3),
+        "machine feed limit"
+    );
+
+    let run = std::process::Command::new(CELL)
+        .args(args)
+        .arg(&out)
+        .args(["--machine", "hotwire_xy"])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(64));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.starts_with("error: --machine"), "{stderr}");
+    assert!(stderr.contains("4-axis"), "{stderr}");
 }
 
 #[test]

@@ -1,16 +1,19 @@
 //! `cell hotwire`: plan one hot-wire cut on the spot, without DDS, and write the trajectory and
 //! a report.
 //!
-//! Writes `DIR/trajectory.csv` (`x_mm,y_mm,feed_mm_s,current_a`: lead-in, the closed cut,
-//! lead-out, in machine order; the u,v tip columns come with root/tip synchronisation) and
-//! `DIR/report.json` (baseline and optimised exposure statistics, loss, run data).
+//! Writes `DIR/trajectory.csv` (`x_mm,y_mm[,u_mm,v_mm],feed_mm_s,current_a`: the carriage
+//! positions in machine coordinates for lead-in, the closed cut and lead-out, in machine
+//! order; u,v on a 4-axis machine) and `DIR/report.json` (baseline and optimised exposure
+//! statistics of the root and, on a tapered panel, the tip; loss; run data).
 
 use std::{fmt::Write as _, ops::ControlFlow, path::PathBuf, process::ExitCode};
 
 use cell_planner::{
-    job::{self, AirfoilSource, ExposureStats, HotwireJob, HotwirePlan},
+    job::{self, AirfoilSource, ExposureStats, HotwireJob, HotwirePlan, TipSection},
     pso::PsoConfig,
+    wing::Placement,
 };
+use cell_profiles::MachineProfile;
 use clap::Args;
 use serde::Serialize;
 
@@ -23,9 +26,36 @@ pub struct HotwireArgs {
     /// Chord [mm].
     #[arg(long, value_name = "MM")]
     pub chord: f64,
-    /// Foam id from the material library (e.g. eps_h_grade, xps).
+    /// Tip airfoil of a tapered panel (default: the root's); needs a 4-axis machine.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub tip: Option<String>,
+    /// Tip chord [mm] (default: the root chord).
+    #[arg(long, value_name = "MM")]
+    pub tip_chord: Option<f64>,
+    /// Tip twist [deg], positive nose up, about --twist-pivot.
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub tip_twist: Option<f64>,
+    /// Tip leading-edge sweep [mm], positive swept back.
+    #[arg(long, value_name = "MM", allow_hyphen_values = true)]
+    pub tip_sweep: Option<f64>,
+    /// Twist pivot as a fraction of the tip chord from its LE.
+    #[arg(long, value_name = "F", default_value_t = 0.25)]
+    pub twist_pivot: f64,
+    /// Panel span between the root and tip faces [mm].
+    #[arg(long, value_name = "MM")]
+    pub span: Option<f64>,
+    /// Machine profile: a name under config/machines (hotwire_xyuv, hotwire_xy) or a YAML file.
+    #[arg(long, value_name = "NAME|FILE", default_value = job::DEFAULT_MACHINE)]
+    pub machine: String,
+    /// Foam name or alias from the material library (e.g. EPS, XPS, eps_s_grade).
     #[arg(long, value_name = "NAME")]
     pub material: Option<String>,
+    /// Target exposure CSE (default: the baseline's mean exposure).
+    #[arg(long, value_name = "E")]
+    pub cse: Option<f64>,
+    /// Cutting feed of the faster foam face [mm/s].
+    #[arg(long, value_name = "MM_S")]
+    pub feed: Option<f64>,
     /// PSO iterations (default: the paper's 8000).
     #[arg(long, value_name = "N")]
     pub iterations: Option<usize>,
@@ -72,8 +102,29 @@ pub struct Report {
     pub seconds: f64,
     /// RNG seed.
     pub seed: u64,
+    /// Machine profile name.
+    pub machine: String,
+    /// The tip section of a tapered panel.
+    pub tip: Option<TipReport>,
     /// Fallbacks and warnings.
     pub notes: Vec<String>,
+}
+
+/// The tip section's part of `report.json`.
+#[derive(Debug, Serialize)]
+pub struct TipReport {
+    /// The section's name from its file.
+    pub airfoil_name: String,
+    /// Chord [mm].
+    pub chord_mm: f64,
+    /// Wire offset of its baseline [mm].
+    pub offset_mm: f64,
+    /// Exposure target.
+    pub cse: f64,
+    /// Baseline exposure statistics.
+    pub baseline: ExposureStats,
+    /// Optimised exposure statistics (along the synchronised path).
+    pub optimised: ExposureStats,
 }
 
 fn usage(message: impl std::fmt::Display) -> ExitCode {
@@ -82,12 +133,36 @@ fn usage(message: impl std::fmt::Display) -> ExitCode {
 }
 
 /// The job the options ask for.
-pub fn job_from_args(a: &HotwireArgs) -> HotwireJob {
+///
+/// # Errors
+/// The machine profile does not resolve (the message names it).
+pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
     let defaults = HotwireJob::default();
-    HotwireJob {
-        root_airfoil: AirfoilSource::parse(&a.airfoil),
+    let machine = MachineProfile::resolve(&a.machine).map_err(|e| format!("--machine: {e}"))?;
+    let root_airfoil = AirfoilSource::parse(&a.airfoil);
+    let tapered =
+        a.tip.is_some() || a.tip_chord.is_some() || a.tip_twist.is_some() || a.tip_sweep.is_some();
+    let tip = tapered.then(|| TipSection {
+        airfoil: a
+            .tip
+            .as_deref()
+            .map_or_else(|| root_airfoil.clone(), AirfoilSource::parse),
+        chord_mm: a.tip_chord.unwrap_or(a.chord),
+        placement: Placement {
+            sweep_mm: a.tip_sweep.unwrap_or(0.0),
+            twist_deg: a.tip_twist.unwrap_or(0.0),
+            pivot_chord_fraction: a.twist_pivot,
+        },
+    });
+    Ok(HotwireJob {
+        root_airfoil,
         chord_mm: a.chord,
+        tip,
+        span_mm: a.span.unwrap_or(defaults.span_mm),
+        machine,
         material: a.material.clone().unwrap_or(defaults.material.clone()),
+        cse: a.cse,
+        feed_mm_s: a.feed.unwrap_or(defaults.feed_mm_s),
         panels: a.panels.unwrap_or(defaults.panels),
         pso: PsoConfig {
             iterations: a.iterations.unwrap_or(defaults.pso.iterations),
@@ -96,41 +171,67 @@ pub fn job_from_args(a: &HotwireArgs) -> HotwireJob {
         },
         seed: a.seed,
         ..defaults
-    }
+    })
 }
 
-/// The trajectory CSV: lead-in, cut, lead-out. Where one part ends on the point the next begins
-/// with, the point is written once (a repeated row is a zero-length move for a controller).
+/// The trajectory CSV: carriage positions of lead-in, cut and lead-out, with u,v on a 4-axis
+/// machine. Where one part ends on the point the next begins with, the point is written once
+/// (a repeated row is a zero-length move for a controller).
 pub fn trajectory_csv(plan: &HotwirePlan) -> String {
-    let mut out = String::from("x_mm,y_mm,feed_mm_s,current_a\n");
-    let (f, a) = (plan.lead_feed_mm_s, plan.lead_current_a);
-    let lead_in = plan.lead_in.iter().map(|p| (p, f, a));
-    let cut = plan
-        .optimised
-        .iter()
-        .zip(plan.feed_mm_s.iter().zip(&plan.current_a))
-        .map(|(p, (&f, &a))| (p, f, a));
-    let lead_out = plan.lead_out.iter().map(|p| (p, f, a));
+    let mut out = String::from(if plan.four_axis {
+        "x_mm,y_mm,u_mm,v_mm,feed_mm_s,current_a\n"
+    } else {
+        "x_mm,y_mm,feed_mm_s,current_a\n"
+    });
     let mut previous = None;
-    for (p, f, a) in lead_in.chain(cut).chain(lead_out) {
-        if previous == Some(*p) {
-            continue;
+    for m in [&plan.lead_in, &plan.cut, &plan.lead_out] {
+        for k in 0..m.len() {
+            let (xy, uv) = (m.xy[k], m.uv[k]);
+            if previous == Some((xy, uv)) {
+                continue;
+            }
+            previous = Some((xy, uv));
+            let (f, a) = (m.feed_mm_s[k], m.current_a[k]);
+            let _ = if plan.four_axis {
+                writeln!(
+                    out,
+                    "{:.6},{:.6},{:.6},{:.6},{f:.4},{a:.4}",
+                    xy.x, xy.y, uv.x, uv.y
+                )
+            } else {
+                writeln!(out, "{:.6},{:.6},{f:.4},{a:.4}", xy.x, xy.y)
+            };
         }
-        previous = Some(*p);
-        let _ = writeln!(out, "{:.6},{:.6},{f:.4},{a:.4}", p.x, p.y);
     }
     out
 }
 
+fn failure(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::FAILURE
+}
+
 /// Runs `cell hotwire`.
 pub fn run(a: HotwireArgs) -> ExitCode {
-    let job = job_from_args(&a);
+    let job = match job_from_args(&a) {
+        Ok(job) => job,
+        Err(e) => return usage(e),
+    };
     if let Err(e) = job::validate(&job) {
         let flag = match &e {
-            job::JobError::InvalidParameter {
-                name: "chord_mm", ..
-            } => "--chord",
-            job::JobError::InvalidParameter { name: "panels", .. } => "--panels",
+            job::JobError::InvalidParameter { name, .. } => match *name {
+                "chord_mm" => "--chord",
+                "panels" => "--panels",
+                "span_mm" => "--span",
+                "feed_mm_s" => "--feed",
+                "cse" => "--cse",
+                "tip_chord_mm" => "--tip-chord",
+                "tip_twist_deg" => "--tip-twist",
+                "tip_sweep_mm" => "--tip-sweep",
+                "twist_pivot_chord_fraction" => "--twist-pivot",
+                _ => "",
+            },
+            job::JobError::Machine { .. } => "--machine",
             _ => "",
         };
         return usage(format!(
@@ -144,10 +245,16 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     if let Err(e) = job.root_airfoil.load() {
         return usage(format!("--airfoil: {e}"));
     }
+    if let Some(t) = &job.tip {
+        if let Err(e) = t.airfoil.load() {
+            return usage(format!("--tip: {e}"));
+        }
+    }
     if let Err(e) = std::fs::create_dir_all(&a.out) {
         return usage(format!("--out {}: {e}", a.out.display()));
     }
-    let bar = indicatif::ProgressBar::new(job.pso.iterations as u64);
+    let sections = if job.tip.is_some() { 2 } else { 1 };
+    let bar = indicatif::ProgressBar::new((job.pso.iterations * sections) as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{bar:40} {pos}/{len} iterations, loss {msg}, ETA {eta}",
@@ -162,7 +269,7 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     bar.finish_and_clear();
     let plan = match planned {
         Ok(plan) => plan,
-        Err(e) => return usage(format!("--airfoil {}: {e}", a.airfoil)),
+        Err(e) => return failure(e),
     };
     let report = Report {
         airfoil: a.airfoil.clone(),
@@ -178,6 +285,15 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         iterations: plan.iterations,
         seconds: plan.seconds,
         seed: plan.seed,
+        machine: plan.machine.clone(),
+        tip: plan.tip.as_ref().map(|t| TipReport {
+            airfoil_name: t.airfoil.clone(),
+            chord_mm: t.chord_mm,
+            offset_mm: t.offset_mm,
+            cse: t.cse,
+            baseline: t.baseline_stats,
+            optimised: t.optimised_stats,
+        }),
         notes: plan.notes.clone(),
     };
     let json = match serde_json::to_string_pretty(&report) {
@@ -190,14 +306,21 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     ] {
         let path = a.out.join(name);
         if let Err(e) = std::fs::write(&path, text) {
-            return usage(format!("--out: cannot write {}: {e}", path.display()));
+            return failure(format!("--out: cannot write {}: {e}", path.display()));
         }
     }
     for note in &plan.notes {
         eprintln!("note: {note}");
     }
+    let tip = plan.tip.as_ref().map_or(String::new(), |t| {
+        format!(
+            "; tip {} at {} mm: RMS {:.4} -> {:.4}",
+            t.airfoil, t.chord_mm, t.baseline_stats.rms, t.optimised_stats.rms
+        )
+    });
     println!(
-        "cell hotwire: {} at {} mm: RMS {:.4} -> {:.4}, CV {:.4} -> {:.4} ({} iterations, {:.1} s); wrote {}",
+        "cell hotwire: {} at {} mm: RMS {:.4} -> {:.4}, CV {:.4} -> {:.4}{tip} ({} iterations, \
+         {:.1} s, machine {}); wrote {}",
         plan.airfoil,
         job.chord_mm,
         plan.baseline_stats.rms,
@@ -206,6 +329,7 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         plan.optimised_stats.cv,
         plan.iterations,
         plan.seconds,
+        plan.machine,
         a.out.display()
     );
     ExitCode::SUCCESS

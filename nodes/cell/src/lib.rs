@@ -65,7 +65,7 @@ enum Command {
         args: Vec<String>,
     },
     /// Plan one hot-wire cut without DDS: write DIR/trajectory.csv and DIR/report.json.
-    Hotwire(hotwire::HotwireArgs),
+    Hotwire(Box<hotwire::HotwireArgs>),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
     Node {
         /// The node's exec name.
@@ -117,7 +117,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
                 }
             }
         }
-        Command::Hotwire(args) => hotwire::run(args),
+        Command::Hotwire(args) => hotwire::run(*args),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
             rerun,

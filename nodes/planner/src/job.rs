@@ -7,9 +7,10 @@
 //! Synchronous and free of ROS/DDS: the planner node runs [`plan`] on a blocking thread, the
 //! `cell hotwire` command runs it directly.
 //!
-//! Today the job plans one section (the root); the wire path lies in the root plane (z = 0) and
-//! the toolpath carries no secondary (tip) points. Root/tip synchronisation for 4-axis cutters
-//! ([`crate::airfoil::synchronise`]) is a later step.
+//! A straight cut plans the root section only. A tapered panel ([`HotwireJob::tip`]) plans the
+//! tip section too, synchronises both paths point for point and projects them onto the
+//! machine's carriage planes ([`crate::wing`]); every carriage position is checked against the
+//! machine profile's travel ([`cell_profiles::MachineProfile`]).
 
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -19,13 +20,15 @@ use cell_msgs::{
     builtin_interfaces::Time, geometry_msgs::Point, std_msgs::Header, HeatMap, Toolpath,
     ToolpathSegment,
 };
-use nalgebra::Point2;
+use cell_profiles::{EnvelopeViolation, HotwireGeometry, MachineProfile};
+use nalgebra::{Point2, Vector2};
 
-use crate::airfoil::{Airfoil, AirfoilError};
+use crate::airfoil::{Airfoil, AirfoilError, SyncedPoints};
 use crate::exposure::{coefficient_of_variation, DistanceLaw, ExposureModel, Panels};
 use crate::kerf::{self, CurrentLimits, MaterialLibrary};
 use crate::pso::{self, Objective, Problem, PsoConfig, PsoError};
 use crate::trajectory::{is_feasible, Baseline};
+use crate::wing::{move_durations, synchronise_paths, Placement, Towers};
 
 /// The UIUC sections shipped in `config/airfoils/`, compiled in: (name, `.dat` text).
 pub const EMBEDDED_AIRFOILS: &[(&str, &str)] = &[
@@ -148,6 +151,28 @@ pub enum JobError {
         #[source]
         source: PsoError,
     },
+    /// The machine profile cannot run this job.
+    #[error("machine {machine:?} {reason}")]
+    Machine {
+        /// The profile name.
+        machine: String,
+        /// Why not.
+        reason: String,
+    },
+    /// A carriage position outside the machine's travel.
+    #[error("{what} point {point}: {violation}")]
+    Envelope {
+        /// `lead-in`, `cut` or `lead-out`.
+        what: &'static str,
+        /// Index of the point in that motion.
+        point: usize,
+        /// Which axis and by how much.
+        #[source]
+        violation: EnvelopeViolation,
+    },
+    /// The kerf model rejected a current schedule input.
+    #[error(transparent)]
+    Kerf(#[from] kerf::KerfError),
     /// The progress callback stopped the run.
     #[error("cancelled after {iteration} iterations")]
     Cancelled {
@@ -156,26 +181,41 @@ pub enum JobError {
     },
 }
 
-/// One hot-wire cut to plan.
+/// The tip section of a tapered panel (4-axis machines).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TipSection {
+    /// The tip airfoil (may differ from the root).
+    pub airfoil: AirfoilSource,
+    /// Tip chord (mm), > 0.
+    pub chord_mm: f64,
+    /// Sweep and twist relative to the root ([`Placement::apply`]).
+    pub placement: Placement,
+}
+
+/// One hot-wire cut to plan: a straight extrusion of the root section, or with a
+/// [`HotwireJob::tip`] a tapered, swept, twisted panel on a 4-axis machine ([`crate::wing`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct HotwireJob {
-    /// The section to cut.
+    /// The root section to cut.
     pub root_airfoil: AirfoilSource,
-    /// Chord (mm), > 0.
+    /// Root chord (mm), > 0.
     pub chord_mm: f64,
-    /// Foam id in the material library (case-insensitive, e.g. `eps_h_grade`, `xps`).
+    /// The tip section; `None` (or one equal to the root): a straight cut.
+    pub tip: Option<TipSection>,
+    /// Panel span between the root and tip faces (mm), > 0, at most the room between the root
+    /// face and the UV tower.
+    pub span_mm: f64,
+    /// The machine: tower geometry, travel, feed limit, wire and supply (`config/machines`).
+    pub machine: MachineProfile,
+    /// Foam name or alias in the material library (case-insensitive, e.g. `EPS`, `xps`).
     pub material: String,
-    /// Wire id in the material library.
-    pub wire: String,
     /// Nominal wire current (A): sets the default offset (kerf / 2 at this current and feed)
     /// and is the constant current when the material library cannot give a schedule.
     pub current_a: f64,
-    /// Supply limits for the current schedule.
-    pub supply: CurrentLimits,
     /// Target exposure CSE; `None`: the baseline's mean exposure.
     pub cse: Option<f64>,
-    /// Wire-centre offset from the surface (mm); `None`: kerf / 2 from the material library at
-    /// `current_a` and `feed_mm_s`, else [`FALLBACK_OFFSET_MM`].
+    /// Wire-centre offset from the faster face's surface (mm); `None`: kerf / 2 from the
+    /// material library at `current_a` and `feed_mm_s`, else [`FALLBACK_OFFSET_MM`].
     pub offset_mm: Option<f64>,
     /// Surface panels N for the exposure (default 100): the profile has N values.
     pub panels: usize,
@@ -188,26 +228,29 @@ pub struct HotwireJob {
     pub pso: PsoConfig,
     /// RNG seed; the same seed gives the same plan.
     pub seed: u64,
-    /// Cutting feed (mm/s).
+    /// Cutting feed of the faster foam face (mm/s).
     pub feed_mm_s: f64,
     /// Length of the straight lead-in and lead-out behind the trailing edge (mm).
     pub lead_in_mm: f64,
 }
 
+/// The machine profile [`HotwireJob::default`] uses.
+pub const DEFAULT_MACHINE: &str = "hotwire_xyuv";
+
 impl Default for HotwireJob {
-    /// s1223 at 200 mm in H-grade EPS with 0.36 mm Nichrome at 3 A and 15 mm/s (the seed 001
-    /// worked-example conditions), 100 panels, the paper's swarm.
+    /// s1223 at 200 mm, straight, 300 mm span on [`DEFAULT_MACHINE`], in H-grade EPS at 3 A and
+    /// 15 mm/s (the seed 001 worked-example conditions), 100 panels, the paper's swarm.
     fn default() -> Self {
         Self {
             root_airfoil: AirfoilSource::Named("s1223".into()),
             chord_mm: 200.0,
+            tip: None,
+            span_mm: 300.0,
+            // Embedded and tested (`cell_profiles`), so it always resolves.
+            machine: MachineProfile::resolve(DEFAULT_MACHINE)
+                .expect("embedded default machine profile"),
             material: "eps_h_grade".into(),
-            wire: "nichrome_0_36mm".into(),
             current_a: 3.0,
-            supply: CurrentLimits {
-                min_a: 0.0,
-                max_a: 10.0,
-            },
             cse: None,
             offset_mm: None,
             panels: 100,
@@ -257,30 +300,29 @@ impl ExposureStats {
     }
 }
 
-/// A planned hot-wire cut (mm, mm/s, A), see the module docs.
+/// One section's plan, in the section's own frame (LE at the origin, chord along +x; mm).
 #[derive(Debug, Clone, PartialEq)]
-pub struct HotwirePlan {
+pub struct SectionPlan {
     /// Section name (from the `.dat` name line).
     pub airfoil: String,
-    /// The scaled foil (LE at the origin, TE at (chord, 0)), Selig order.
+    /// Chord (mm).
+    pub chord_mm: f64,
+    /// The scaled foil, Selig order.
     pub foil: Vec<Point2<f64>>,
     /// The resampled foil whose panels the exposure is evaluated on (N + 1 points).
     pub surface: Vec<Point2<f64>>,
     /// The fixed-offset baseline path (closed).
     pub baseline: Vec<Point2<f64>>,
-    /// The optimised path (closed, same points as the baseline moved along its normals).
+    /// The path the wire follows on this face (closed): the optimised path, resampled point
+    /// for point with the other face's on a tapered panel.
     pub optimised: Vec<Point2<f64>>,
-    /// Straight lead-in from behind the TE to the first path point.
-    pub lead_in: Vec<Point2<f64>>,
-    /// Straight lead-out from the last path point back behind the TE.
-    pub lead_out: Vec<Point2<f64>>,
-    /// Exposure model used (for [`HotwirePlan::exposure_matrix_heat_map`]).
-    pub model: ExposureModel,
+    /// Wire-centre offset of the baseline (mm).
+    pub offset_mm: f64,
     /// The exposure target CSE.
     pub cse: f64,
     /// Baseline exposure per panel.
     pub baseline_exposure: Vec<f64>,
-    /// Optimised exposure per panel.
+    /// Exposure per panel along [`SectionPlan::optimised`].
     pub optimised_exposure: Vec<f64>,
     /// Baseline uniformity.
     pub baseline_stats: ExposureStats,
@@ -288,27 +330,93 @@ pub struct HotwirePlan {
     pub optimised_stats: ExposureStats,
     /// Loss of the baseline.
     pub baseline_loss: f64,
-    /// Loss of the optimised path.
+    /// Loss of the optimised path (as optimised, before any resampling).
     pub final_loss: f64,
     /// (iteration, best loss) at iteration 0 and at every improvement.
     pub loss_history: Vec<(usize, f64)>,
-    /// Iterations run.
+}
+
+/// A run of carriage moves in machine coordinates (mm, mm/s, A). Point k is reached by move
+/// k − 1, which lasts max(‖ΔXY‖, ‖ΔUV‖) / `feed_mm_s[k]`; entry 0 repeats entry 1's values.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Motion {
+    /// XY carriage positions (root tower).
+    pub xy: Vec<Point2<f64>>,
+    /// UV carriage positions (tip tower); equal to `xy` on a straight cut.
+    pub uv: Vec<Point2<f64>>,
+    /// Feed of the carriage that moves farther, per point (mm/s).
+    pub feed_mm_s: Vec<f64>,
+    /// Wire current per point (A).
+    pub current_a: Vec<f64>,
+}
+
+impl Motion {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.xy.len()
+    }
+
+    /// True without points.
+    pub fn is_empty(&self) -> bool {
+        self.xy.is_empty()
+    }
+}
+
+/// A planned hot-wire cut (see the module docs). The root section's results are the flat
+/// fields (`airfoil` … `loss_history`); the tip's, on a tapered panel, are in `tip`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HotwirePlan {
+    /// Root section name (from the `.dat` name line).
+    pub airfoil: String,
+    /// The scaled root foil (LE at the origin, TE at (chord, 0)), Selig order.
+    pub foil: Vec<Point2<f64>>,
+    /// The resampled root foil whose panels the exposure is evaluated on (N + 1 points).
+    pub surface: Vec<Point2<f64>>,
+    /// The root fixed-offset baseline path (closed).
+    pub baseline: Vec<Point2<f64>>,
+    /// The root path the wire follows (closed).
+    pub optimised: Vec<Point2<f64>>,
+    /// Exposure model used (for [`HotwirePlan::exposure_matrix_heat_map`]).
+    pub model: ExposureModel,
+    /// The root exposure target CSE.
+    pub cse: f64,
+    /// Root baseline exposure per panel.
+    pub baseline_exposure: Vec<f64>,
+    /// Root optimised exposure per panel.
+    pub optimised_exposure: Vec<f64>,
+    /// Root baseline uniformity.
+    pub baseline_stats: ExposureStats,
+    /// Root optimised uniformity.
+    pub optimised_stats: ExposureStats,
+    /// Loss of the root baseline.
+    pub baseline_loss: f64,
+    /// Loss of the optimised root path.
+    pub final_loss: f64,
+    /// Root (iteration, best loss) at iteration 0 and at every improvement.
+    pub loss_history: Vec<(usize, f64)>,
+    /// Root wire-centre offset of the baseline (mm).
+    pub offset_mm: f64,
+    /// The tip section on a tapered panel.
+    pub tip: Option<SectionPlan>,
+    /// Iterations run (both sections together on a tapered panel).
     pub iterations: usize,
     /// Wall time of the optimisation (s).
     pub seconds: f64,
     /// RNG seed used.
     pub seed: u64,
-    /// Wire-centre offset used (mm).
-    pub offset_mm: f64,
-    /// Feed at each optimised path point (mm/s).
-    pub feed_mm_s: Vec<f64>,
-    /// Wire current at each optimised path point (A).
-    pub current_a: Vec<f64>,
-    /// Feed and current on the leads (mm/s, A).
-    pub lead_feed_mm_s: f64,
-    /// Wire current on the leads (A).
-    pub lead_current_a: f64,
-    /// Notes for the operator (fallbacks taken, clamped currents).
+    /// The machine profile's name.
+    pub machine: String,
+    /// Tower geometry the carriage moves were projected with.
+    pub towers: Towers,
+    /// True if the machine has a UV carriage (the toolpath carries secondary points).
+    pub four_axis: bool,
+    /// Straight lead-in from behind the trailing edge to the first cut point.
+    pub lead_in: Motion,
+    /// The cut (closed: the last point repeats the first).
+    pub cut: Motion,
+    /// Straight lead-out from the last cut point back behind the trailing edge.
+    pub lead_out: Motion,
+    /// Notes for the operator (fallbacks taken, clamped currents, slowed moves).
     pub notes: Vec<String>,
 }
 
@@ -317,19 +425,14 @@ struct Process {
     offset_mm: f64,
     /// (Q_eff in J/m², R' in Ω/m) when the library has the material and wire.
     schedule: Option<(f64, f64)>,
+    supply: CurrentLimits,
     notes: Vec<String>,
 }
 
-fn find<'a, T>(map: &'a std::collections::BTreeMap<String, T>, id: &str) -> Option<&'a T> {
-    map.iter()
-        .find(|(k, _)| k.eq_ignore_ascii_case(id))
-        .map(|(_, v)| v)
-}
-
-fn process(job: &HotwireJob) -> Result<Process, JobError> {
+fn process(job: &HotwireJob, hw: &HotwireGeometry) -> Result<Process, JobError> {
     let lib = MaterialLibrary::builtin();
     let mut notes = Vec::new();
-    let (foam, wire) = (find(&lib.foams, &job.material), find(&lib.wires, &job.wire));
+    let (foam, wire) = (lib.find_foam(&job.material), lib.find_wire(&hw.wire));
     let model = match (foam, wire) {
         (Some(foam), Some(wire)) => {
             let inputs = kerf::KerfInputs::for_cut(job.current_a, job.feed_mm_s * 1e-3, wire, foam);
@@ -353,15 +456,20 @@ fn process(job: &HotwireJob) -> Result<Process, JobError> {
         });
     }
     let schedule = match &model {
-        // The area energy that cuts a kerf of 2 × offset: Q_eff = λ · ρ_f · ^mass Q_eff (eq. 4–6).
+        // The area energy that cuts a kerf of 2 × offset: Q_eff = λ · ρ_f · ^mass Q_eff (seed 001
+        // eq. 4–6).
         Some((_, foam, wire)) => Some((
             2.0 * offset_mm * 1e-3 * foam.density_kg_m3 * foam.mass_energy_j_kg(),
             wire.resistance_ohm_per_m,
         )),
         None => {
             let what = match (foam, wire) {
-                (None, _) => format!("material {:?} is not in the material library", job.material),
-                (_, None) => format!("wire {:?} is not in the material library", job.wire),
+                (None, _) => format!(
+                    "material {:?} is not in the material library (known: {})",
+                    job.material,
+                    lib.foam_names().join(", ")
+                ),
+                (_, None) => format!("wire {:?} is not in the material library", hw.wire),
                 _ => "the kerf model rejected the current/feed".to_string(),
             };
             notes.push(format!(
@@ -379,6 +487,10 @@ fn process(job: &HotwireJob) -> Result<Process, JobError> {
     Ok(Process {
         offset_mm,
         schedule,
+        supply: CurrentLimits {
+            min_a: hw.supply_a[0],
+            max_a: hw.supply_a[1],
+        },
         notes,
     })
 }
@@ -402,6 +514,7 @@ pub fn validate(job: &HotwireJob) -> Result<(), JobError> {
     positive("chord_mm", job.chord_mm)?;
     positive("feed_mm_s", job.feed_mm_s)?;
     positive("current_a", job.current_a)?;
+    positive("span_mm", job.span_mm)?;
     if !(job.lead_in_mm.is_finite() && job.lead_in_mm >= 0.0) {
         return Err(JobError::InvalidParameter {
             name: "lead_in_mm",
@@ -419,7 +532,66 @@ pub fn validate(job: &HotwireJob) -> Result<(), JobError> {
     if let Some(c) = job.cse {
         positive("cse", c)?;
     }
+    if let Some(tip) = &job.tip {
+        positive("tip_chord_mm", tip.chord_mm)?;
+        for (name, v) in [
+            ("tip_twist_deg", tip.placement.twist_deg),
+            ("tip_sweep_mm", tip.placement.sweep_mm),
+            (
+                "twist_pivot_chord_fraction",
+                tip.placement.pivot_chord_fraction,
+            ),
+        ] {
+            if !v.is_finite() {
+                return Err(JobError::InvalidParameter {
+                    name,
+                    value: v,
+                    requirement: "finite",
+                });
+            }
+        }
+        if tip.placement.twist_deg.abs() > 45.0 {
+            return Err(JobError::InvalidParameter {
+                name: "tip_twist_deg",
+                value: tip.placement.twist_deg,
+                requirement: "within ±45°",
+            });
+        }
+    }
+    let hw = job
+        .machine
+        .hotwire
+        .as_ref()
+        .ok_or_else(|| JobError::Machine {
+            machine: job.machine.name.clone(),
+            reason: "is not a hot-wire machine (no hotwire section)".into(),
+        })?;
+    if let Some(tip) = &job.tip {
+        let tapered = tip.airfoil != job.root_airfoil
+            || tip.chord_mm != job.chord_mm
+            || tip.placement.sweep_mm != 0.0
+            || tip.placement.twist_deg != 0.0;
+        if tapered && !job.machine.is_four_axis_hotwire() {
+            return Err(two_axis(&job.machine));
+        }
+    }
+    let room = hw.tower_separation_mm - hw.root_plane_mm;
+    if job.span_mm > room {
+        return Err(JobError::InvalidParameter {
+            name: "span_mm",
+            value: job.span_mm,
+            requirement: "at most the distance from the root face to the UV tower",
+        });
+    }
     Ok(())
+}
+
+fn two_axis(machine: &MachineProfile) -> JobError {
+    JobError::Machine {
+        machine: machine.name.clone(),
+        reason: "has no UV carriage: a tapered, swept or twisted panel needs a 4-axis machine"
+            .into(),
+    }
 }
 
 /// Plans `job` (module docs). `progress` is called after every iteration; returning
@@ -427,7 +599,8 @@ pub fn validate(job: &HotwireJob) -> Result<(), JobError> {
 ///
 /// # Errors
 /// Invalid parameters (named), an unknown or malformed airfoil (named, with file and line),
-/// an infeasible baseline or other planning failure (with the airfoil), cancellation.
+/// an infeasible baseline or other planning failure (with the airfoil), a path outside the
+/// machine's travel, cancellation.
 pub fn plan(
     job: &HotwireJob,
     progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
@@ -435,23 +608,29 @@ pub fn plan(
     plan_observed(job, |_| {}, progress)
 }
 
-/// [`plan`], also handing `on_baseline` the baseline's exposure profile (as
-/// [`HotwirePlan::baseline_heat_map`] would give it) before the swarm starts, so a caller can
-/// show it while the optimiser runs.
-///
-/// # Errors
-/// As [`plan`].
-pub fn plan_observed(
-    job: &HotwireJob,
+/// What [`plan_section`] needs besides the foil.
+struct SectionJob<'a> {
+    job: &'a HotwireJob,
+    name: &'a str,
+    offset_mm: f64,
+    /// Iterations already run by earlier sections, and the total over all sections.
+    iterations_before: usize,
+    iterations_total: usize,
+    started: Instant,
+}
+
+/// Plans one section: baseline at `offset_mm`, swarm, exposure before and after.
+fn plan_section(
+    s: &SectionJob<'_>,
+    loaded: &Airfoil,
+    chord_mm: f64,
     on_baseline: impl FnOnce(HeatMap),
-    mut progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
-) -> Result<HotwirePlan, JobError> {
-    validate(job)?;
-    let loaded = job.root_airfoil.load()?;
-    let foil = loaded.normalised().scaled(job.chord_mm)?;
-    let proc = process(job)?;
+    progress: &mut impl FnMut(&JobProgress) -> ControlFlow<()>,
+) -> Result<(SectionPlan, usize), JobError> {
+    let job = s.job;
+    let foil = loaded.normalised().scaled(chord_mm)?;
     let wrap = |source: PsoError| JobError::Plan {
-        airfoil: job.root_airfoil.to_string(),
+        airfoil: s.name.to_string(),
         source,
     };
     let path_points = if job.path_points == 0 {
@@ -460,7 +639,7 @@ pub fn plan_observed(
         job.path_points
     };
     let baseline =
-        Baseline::fixed_offset(&foil, proc.offset_mm, path_points).map_err(|e| wrap(e.into()))?;
+        Baseline::fixed_offset(&foil, s.offset_mm, path_points).map_err(|e| wrap(e.into()))?;
     let objective = Objective {
         cse: job.cse,
         ..job.objective
@@ -479,64 +658,34 @@ pub fn plan_observed(
         seed: job.seed,
         ..job.pso
     };
-    let started = Instant::now();
     let result = pso::optimise(&problem, &config, |p| {
-        let elapsed = started.elapsed().as_secs_f64();
-        let eta_s = elapsed / p.iteration.max(1) as f64 * (p.iterations - p.iteration) as f64;
+        let done = s.iterations_before + p.iteration;
+        let elapsed = s.started.elapsed().as_secs_f64();
+        let eta_s = elapsed / done.max(1) as f64 * s.iterations_total.saturating_sub(done) as f64;
         progress(&JobProgress {
-            iteration: p.iteration,
-            total: p.iterations,
+            iteration: done,
+            total: s.iterations_total,
             best_loss: p.best_loss,
             eta_s,
         })
     })
     .map_err(wrap)?;
-    let seconds = started.elapsed().as_secs_f64();
     if result.cancelled {
         return Err(JobError::Cancelled {
-            iteration: result.iterations_run,
+            iteration: s.iterations_before + result.iterations_run,
         });
     }
-    let baseline_path = problem.path(&vec![0.0; k]);
     let optimised = problem.path(&result.controls);
     let optimised_exposure = problem.exposure(&result.controls).map_err(wrap)?;
     let cse = problem.cse();
-
-    let mut notes = proc.notes;
-    let feed_mm_s = vec![job.feed_mm_s; optimised.len()];
-    let current_a = match proc.schedule {
-        Some((q_eff, r)) => {
-            let schedule = kerf::current_schedule(&feed_mm_s, q_eff, r, job.supply)
-                .map_err(|e| wrap(PsoError::Trajectory(e.into())))?;
-            let clamped = schedule.iter().filter(|s| s.clamped).count();
-            if clamped > 0 {
-                notes.push(format!(
-                    "{clamped} of {} current set-points clamped to the supply limits {}..{} A: \
-                     the kerf deviates there",
-                    schedule.len(),
-                    job.supply.min_a,
-                    job.supply.max_a
-                ));
-            }
-            schedule.iter().map(|s| s.current_a).collect()
-        }
-        None => vec![job.current_a; optimised.len()],
-    };
-    let lead_current_a = current_a.first().copied().unwrap_or(job.current_a);
-
-    // Leads: straight, along the chord line behind the TE.
-    let (le, te) = (foil.leading_edge(), foil.trailing_edge());
-    let outside = te + (te - le).normalize() * (job.lead_in_mm + proc.offset_mm);
-    let (first, last) = (optimised[0], optimised[optimised.len() - 1]);
-    Ok(HotwirePlan {
+    let plan = SectionPlan {
         airfoil: loaded.name().to_string(),
+        chord_mm,
         foil: foil.points().to_vec(),
         surface: foil.resampled_cosine(surface_points)?.points().to_vec(),
-        baseline: baseline_path,
+        baseline: problem.path(&vec![0.0; k]),
         optimised,
-        lead_in: vec![outside, first],
-        lead_out: vec![last, outside],
-        model: objective.model,
+        offset_mm: s.offset_mm,
         cse,
         baseline_stats: ExposureStats::of(&baseline_exposure, cse),
         optimised_stats: ExposureStats::of(&optimised_exposure, cse),
@@ -545,16 +694,356 @@ pub fn plan_observed(
         baseline_loss: result.baseline_loss,
         final_loss: result.best_loss,
         loss_history: result.history,
-        iterations: result.iterations_run,
+    };
+    Ok((plan, result.iterations_run))
+}
+
+/// Closed perimeter of a foil (mm).
+fn perimeter_mm(foil: &Airfoil) -> f64 {
+    let p = foil.points();
+    (0..p.len())
+        .map(|i| (p[(i + 1) % p.len()] - p[i]).norm())
+        .sum()
+}
+
+/// [`plan`], also handing `on_baseline` the root baseline's exposure profile (as
+/// [`HotwirePlan::baseline_heat_map`] would give it) before the swarm starts, so a caller can
+/// show it while the optimiser runs.
+///
+/// On a tapered panel both sections are optimised (root first, then tip, each with the full
+/// iteration count). The faster face is cut at [`HotwireJob::feed_mm_s`] with the kerf-model
+/// offset; the slower face moves slower by the ratio of the perimeters and, at the one wire
+/// current, melts a kerf wider by the inverse ratio (seed 001 eq. 5: λ ∝ 1/v), so its baseline
+/// offset is scaled up by that ratio.
+///
+/// # Errors
+/// As [`plan`].
+pub fn plan_observed(
+    job: &HotwireJob,
+    on_baseline: impl FnOnce(HeatMap),
+    mut progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
+) -> Result<HotwirePlan, JobError> {
+    validate(job)?;
+    let hw = job
+        .machine
+        .hotwire
+        .as_ref()
+        .expect("validate checked the hotwire section");
+    let four_axis = job.machine.is_four_axis_hotwire();
+    let root_loaded = job.root_airfoil.load()?;
+    let tip = match &job.tip {
+        Some(t) => {
+            let loaded = t.airfoil.load()?;
+            let straight = loaded.points() == root_loaded.points()
+                && t.chord_mm == job.chord_mm
+                && t.placement.sweep_mm == 0.0
+                && t.placement.twist_deg == 0.0;
+            (!straight).then_some((t, loaded))
+        }
+        None => None,
+    };
+    if tip.is_some() && !four_axis {
+        return Err(two_axis(&job.machine));
+    }
+    let proc = process(job, hw)?;
+    let mut notes = proc.notes.clone();
+
+    // Offsets: the longer section is the faster face (nominal offset), the other is wider.
+    let root_perimeter = perimeter_mm(&root_loaded.normalised().scaled(job.chord_mm)?);
+    let (root_offset, tip_offset) = match &tip {
+        Some((t, loaded)) => {
+            let tip_perimeter = perimeter_mm(&loaded.normalised().scaled(t.chord_mm)?);
+            let ratio = root_perimeter / tip_perimeter;
+            if ratio >= 1.0 {
+                (proc.offset_mm, proc.offset_mm * ratio)
+            } else {
+                (proc.offset_mm / ratio, proc.offset_mm)
+            }
+        }
+        None => (proc.offset_mm, proc.offset_mm),
+    };
+    let sections = if tip.is_some() { 2 } else { 1 };
+    let started = Instant::now();
+    let root_name = job.root_airfoil.to_string();
+    let section_job = |name, offset_mm, before| SectionJob {
+        job,
+        name,
+        offset_mm,
+        iterations_before: before,
+        iterations_total: job.pso.iterations * sections,
+        started,
+    };
+    let (mut root, mut iterations) = plan_section(
+        &section_job(&root_name, root_offset, 0),
+        &root_loaded,
+        job.chord_mm,
+        on_baseline,
+        &mut progress,
+    )?;
+    let tip_plan = match &tip {
+        Some((t, loaded)) => {
+            let name = t.airfoil.to_string();
+            let (plan, n) = plan_section(
+                &section_job(&name, tip_offset, iterations),
+                loaded,
+                t.chord_mm,
+                |_| {},
+                &mut progress,
+            )?;
+            iterations += n;
+            Some(plan)
+        }
+        None => None,
+    };
+    let seconds = started.elapsed().as_secs_f64();
+
+    // Point-for-point root and tip paths, in each section's frame.
+    let (root_cut, tip_cut) = match &tip_plan {
+        Some(t) => {
+            let (r, tp) = synchronised(job, &root, t)?;
+            Some((r, tp))
+        }
+        None => None,
+    }
+    .unwrap_or_else(|| (root.optimised.clone(), root.optimised.clone()));
+    let mut tip_plan = tip_plan;
+    if let Some(t) = tip_plan.as_mut() {
+        refresh_exposure(job, &mut root, &root_cut)?;
+        refresh_exposure(job, t, &tip_cut)?;
+    }
+
+    // Leads: straight along each chord line, from behind the TE.
+    let behind_te = |s: &SectionPlan| {
+        let foil = &s.foil;
+        let te = nalgebra::center(&foil[0], &foil[foil.len() - 1]);
+        te + Vector2::new(job.lead_in_mm + s.offset_mm, 0.0)
+    };
+    let root_out = behind_te(&root);
+    let (tip_section, tip_chord, placement) = match (&tip_plan, &tip) {
+        (Some(t), Some((spec, _))) => (t, t.chord_mm, spec.placement),
+        _ => (&root, job.chord_mm, Placement::ROOT),
+    };
+    let tip_out = behind_te(tip_section);
+    let origin = Vector2::new(hw.part_origin_mm[0], hw.part_origin_mm[1]);
+    let towers = Towers {
+        separation_mm: hw.tower_separation_mm,
+        root_plane_mm: hw.root_plane_mm,
+        tip_plane_mm: hw.root_plane_mm + job.span_mm,
+    };
+    let place = |r: &[Point2<f64>], t: &[Point2<f64>]| -> (Vec<Point2<f64>>, Vec<Point2<f64>>) {
+        r.iter()
+            .zip(t)
+            .map(|(r, t)| (r + origin, placement.apply(tip_chord, *t) + origin))
+            .unzip()
+    };
+    let mover = Mover {
+        towers,
+        feed_mm_s: job.feed_mm_s,
+        max_feed_mm_s: job.machine.max_feed_mm_s,
+        schedule: proc.schedule,
+        supply: proc.supply,
+        current_a: job.current_a,
+    };
+    let (r, t) = place(&[root_out, root_cut[0]], &[tip_out, tip_cut[0]]);
+    let lead_in = mover.motion(&r, &t, &mut notes)?;
+    let (r, t) = place(&root_cut, &tip_cut);
+    let cut = mover.motion(&r, &t, &mut notes)?;
+    let last = root_cut.len() - 1;
+    let (r, t) = place(&[root_cut[last], root_out], &[tip_cut[last], tip_out]);
+    let lead_out = mover.motion(&r, &t, &mut notes)?;
+    for (what, m) in [
+        ("lead-in", &lead_in),
+        ("cut", &cut),
+        ("lead-out", &lead_out),
+    ] {
+        check_envelope(&job.machine, four_axis, what, m)?;
+    }
+    root.optimised = root_cut;
+    if let Some(t) = tip_plan.as_mut() {
+        t.optimised = tip_cut;
+    }
+    Ok(HotwirePlan {
+        airfoil: root.airfoil,
+        foil: root.foil,
+        surface: root.surface,
+        baseline: root.baseline,
+        optimised: root.optimised,
+        model: job.objective.model,
+        cse: root.cse,
+        baseline_exposure: root.baseline_exposure,
+        optimised_exposure: root.optimised_exposure,
+        baseline_stats: root.baseline_stats,
+        optimised_stats: root.optimised_stats,
+        baseline_loss: root.baseline_loss,
+        final_loss: root.final_loss,
+        loss_history: root.loss_history,
+        offset_mm: root.offset_mm,
+        tip: tip_plan,
+        iterations,
         seconds,
         seed: job.seed,
-        offset_mm: proc.offset_mm,
-        feed_mm_s,
-        current_a,
-        lead_feed_mm_s: job.feed_mm_s,
-        lead_current_a,
+        machine: job.machine.name.clone(),
+        towers,
+        four_axis,
+        lead_in,
+        cut,
+        lead_out,
         notes,
     })
+}
+
+/// Resamples the two optimised paths point for point ([`synchronise_paths`]) finely enough
+/// that both keep the clearance (3×, then up to 12× the longer path's point count).
+fn synchronised(
+    job: &HotwireJob,
+    root: &SectionPlan,
+    tip: &SectionPlan,
+) -> Result<SyncedPoints, JobError> {
+    let base = root.optimised.len().max(tip.optimised.len());
+    let clearance = job.objective.min_clearance_mm;
+    let mut last_gap = 0.0;
+    for factor in [3, 6, 12] {
+        let (r, t) = synchronise_paths(&root.optimised, &tip.optimised, base * factor + 1)?;
+        if is_feasible(&r, &root.foil, clearance) && is_feasible(&t, &tip.foil, clearance) {
+            return Ok((r, t));
+        }
+        last_gap = crate::trajectory::clearance_mm(&r, &root.foil, f64::INFINITY).min(
+            crate::trajectory::clearance_mm(&t, &tip.foil, f64::INFINITY),
+        );
+    }
+    Err(JobError::Plan {
+        airfoil: root.airfoil.clone(),
+        source: PsoError::InfeasibleBaseline {
+            clearance_mm: last_gap,
+        },
+    })
+}
+
+/// Recomputes a section's optimised exposure and statistics along `path` (the resampled path
+/// the wire really follows).
+fn refresh_exposure(
+    job: &HotwireJob,
+    section: &mut SectionPlan,
+    path: &[Point2<f64>],
+) -> Result<(), JobError> {
+    let wrap = |e: crate::exposure::ExposureError| JobError::Plan {
+        airfoil: section.airfoil.clone(),
+        source: e.into(),
+    };
+    let panels = Panels::from_points(&section.surface).map_err(wrap)?;
+    section.optimised_exposure = job.objective.model.exposure(&panels, path).map_err(wrap)?;
+    section.optimised_stats = ExposureStats::of(&section.optimised_exposure, section.cse);
+    Ok(())
+}
+
+/// Turns placed root/tip face points into carriage moves with feeds and currents.
+struct Mover {
+    towers: Towers,
+    feed_mm_s: f64,
+    max_feed_mm_s: f64,
+    schedule: Option<(f64, f64)>,
+    supply: CurrentLimits,
+    current_a: f64,
+}
+
+impl Mover {
+    /// Moves through the placed face points `root`, `tip` (machine XY frame): each lasts long
+    /// enough for the faster face to run at the feed ([`move_durations`]) and for the faster
+    /// carriage to stay within the machine's feed limit; the wire current follows the faster
+    /// face's speed (seed 001 constant-kerf schedule).
+    fn motion(
+        &self,
+        root: &[Point2<f64>],
+        tip: &[Point2<f64>],
+        notes: &mut Vec<String>,
+    ) -> Result<Motion, JobError> {
+        let (xy, uv): (Vec<_>, Vec<_>) = root
+            .iter()
+            .zip(tip)
+            .map(|(r, t)| self.towers.project(*r, *t))
+            .unzip();
+        let mut durations = move_durations(root, tip, self.feed_mm_s);
+        let mut slowed = 0;
+        let mut carriage_feed = Vec::with_capacity(durations.len());
+        let mut face_speed = Vec::with_capacity(durations.len());
+        for (k, d) in durations.iter_mut().enumerate() {
+            let carriage = (xy[k + 1] - xy[k]).norm().max((uv[k + 1] - uv[k]).norm());
+            if *d > 0.0 && carriage / *d > self.max_feed_mm_s {
+                *d = carriage / self.max_feed_mm_s;
+                slowed += 1;
+            }
+            let face = (root[k + 1] - root[k])
+                .norm()
+                .max((tip[k + 1] - tip[k]).norm());
+            if *d > 0.0 {
+                carriage_feed.push(carriage / *d);
+                face_speed.push(face / *d);
+            } else {
+                carriage_feed.push(self.feed_mm_s);
+                face_speed.push(self.feed_mm_s);
+            }
+        }
+        if slowed > 0 {
+            notes.push(format!(
+                "{slowed} moves slowed to the machine's feed limit {} mm/s (the carriages move \
+                 farther than the foam faces)",
+                self.max_feed_mm_s
+            ));
+        }
+        let currents: Vec<f64> = match self.schedule {
+            Some((q_eff, r)) => {
+                let schedule = kerf::current_schedule(&face_speed, q_eff, r, self.supply)?;
+                let clamped = schedule.iter().filter(|s| s.clamped).count();
+                if clamped > 0 {
+                    notes.push(format!(
+                        "{clamped} of {} current set-points clamped to the supply limits \
+                         {}..{} A: the kerf deviates there",
+                        schedule.len(),
+                        self.supply.min_a,
+                        self.supply.max_a
+                    ));
+                }
+                schedule.iter().map(|s| s.current_a).collect()
+            }
+            None => vec![self.current_a; face_speed.len()],
+        };
+        // Point k is reached by move k − 1; point 0 takes move 0's values.
+        let per_point = |v: &[f64]| {
+            let mut out = Vec::with_capacity(v.len() + 1);
+            out.push(v.first().copied().unwrap_or(self.feed_mm_s));
+            out.extend_from_slice(v);
+            out
+        };
+        Ok(Motion {
+            xy,
+            uv,
+            feed_mm_s: per_point(&carriage_feed),
+            current_a: per_point(&currents),
+        })
+    }
+}
+
+/// Checks every carriage position of `motion` against the machine's travel.
+fn check_envelope(
+    machine: &MachineProfile,
+    four_axis: bool,
+    what: &'static str,
+    motion: &Motion,
+) -> Result<(), JobError> {
+    for (k, (xy, uv)) in motion.xy.iter().zip(&motion.uv).enumerate() {
+        let mut position = vec![('X', xy.x), ('Y', xy.y)];
+        if four_axis {
+            position.extend([('U', uv.x), ('V', uv.y)]);
+        }
+        machine
+            .check_position(&position)
+            .map_err(|violation| JobError::Envelope {
+                what,
+                point: k,
+                violation,
+            })?;
+    }
+    Ok(())
 }
 
 /// How many resampled points give `panels` distinct surface panels on `foil`.
@@ -568,38 +1057,55 @@ fn surface_points(foil: &Airfoil, panels: usize) -> Result<usize, JobError> {
     })
 }
 
-fn point(p: &Point2<f64>) -> Point {
-    Point {
-        x: p.x,
-        y: p.y,
-        z: 0.0,
-    }
-}
+/// Frame id of the planner's toolpaths: the hot-wire machine's coordinates (XY carriage plane
+/// at z = 0, UV at z = tower separation).
+pub const FRAME_ID: &str = "hotwire_machine";
 
-/// Frame id of the planner's messages: the hot-wire cutter's root plane.
-pub const FRAME_ID: &str = "hotwire_root";
+/// Frame id of the planner's exposure heat maps: the root section (LE at the origin).
+pub const SECTION_FRAME_ID: &str = "hotwire_root";
 
 impl HotwirePlan {
-    /// True if the optimised path keeps `min_clearance_mm` from the foil (T ∩ G = ∅).
+    /// True if the root path (and the tip path, on a tapered panel) keeps `min_clearance_mm`
+    /// from its foil (T ∩ G = ∅).
     pub fn is_feasible(&self, min_clearance_mm: f64) -> bool {
         is_feasible(&self.optimised, &self.foil, min_clearance_mm)
+            && self
+                .tip
+                .as_ref()
+                .is_none_or(|t| is_feasible(&t.optimised, &t.foil, min_clearance_mm))
     }
 
-    /// The plan as a hot-wire `Toolpath` (wire current in A): LEAD in, CUT (the closed
-    /// optimised path), LEAD out; z = 0, no secondary (tip) points yet.
+    /// Every carriage position of the plan (lead-in, cut, lead-out) as (XY, UV) pairs, in
+    /// order, without the repeated points where the motions meet.
+    pub fn carriage_positions(&self) -> Vec<(Point2<f64>, Point2<f64>)> {
+        let mut out: Vec<(Point2<f64>, Point2<f64>)> = Vec::new();
+        for m in [&self.lead_in, &self.cut, &self.lead_out] {
+            for p in m.xy.iter().copied().zip(m.uv.iter().copied()) {
+                if out.last() != Some(&p) {
+                    out.push(p);
+                }
+            }
+        }
+        out
+    }
+
+    /// The plan as a hot-wire `Toolpath` in machine coordinates (frame [`FRAME_ID`], wire
+    /// current in A): LEAD in, CUT (closed), LEAD out. `points` are the XY carriage at z = 0;
+    /// on a 4-axis machine `secondary_points` are the UV carriage at z = tower separation and
+    /// `plane_separation_mm` is that separation. Feeds follow [`Motion`]'s convention.
     pub fn to_toolpath(&self, job_id: &str) -> Toolpath {
-        let lead = |pts: &[Point2<f64>]| ToolpathSegment {
-            kind: ToolpathSegment::KIND_LEAD,
-            points: pts.iter().map(point).collect(),
-            feed_mm_s: vec![self.lead_feed_mm_s as f32; pts.len()],
-            power: vec![self.lead_current_a as f32; pts.len()],
-            ..Default::default()
-        };
-        let cut = ToolpathSegment {
-            kind: ToolpathSegment::KIND_CUT,
-            points: self.optimised.iter().map(point).collect(),
-            feed_mm_s: self.feed_mm_s.iter().map(|&f| f as f32).collect(),
-            power: self.current_a.iter().map(|&a| a as f32).collect(),
+        let w = self.towers.separation_mm;
+        let at = |p: &Point2<f64>, z: f64| Point { x: p.x, y: p.y, z };
+        let segment = |kind, m: &Motion| ToolpathSegment {
+            kind,
+            points: m.xy.iter().map(|p| at(p, 0.0)).collect(),
+            secondary_points: if self.four_axis {
+                m.uv.iter().map(|p| at(p, w)).collect()
+            } else {
+                Vec::new()
+            },
+            feed_mm_s: m.feed_mm_s.iter().map(|&f| f as f32).collect(),
+            power: m.current_a.iter().map(|&a| a as f32).collect(),
             ..Default::default()
         };
         Toolpath {
@@ -610,8 +1116,12 @@ impl HotwirePlan {
             job_id: job_id.into(),
             process: Toolpath::PROCESS_HOTWIRE,
             power_unit: Toolpath::POWER_WIRE_CURRENT_A,
-            plane_separation_mm: 0.0,
-            segments: vec![lead(&self.lead_in), cut, lead(&self.lead_out)],
+            plane_separation_mm: w,
+            segments: vec![
+                segment(ToolpathSegment::KIND_LEAD, &self.lead_in),
+                segment(ToolpathSegment::KIND_CUT, &self.cut),
+                segment(ToolpathSegment::KIND_LEAD, &self.lead_out),
+            ],
         }
     }
 
@@ -663,7 +1173,7 @@ fn heat_map(
     HeatMap {
         header: Header {
             stamp: Time::now(),
-            frame_id: FRAME_ID.into(),
+            frame_id: SECTION_FRAME_ID.into(),
         },
         quantity: quantity.into(),
         unit: match model.law {
@@ -741,22 +1251,41 @@ mod tests {
         assert!(a.optimised_stats.rms <= a.baseline_stats.rms + 1e-12);
         assert!(a.is_feasible(Objective::default().min_clearance_mm));
         assert_eq!(a.optimised_exposure.len(), 40);
-        assert_eq!(a.feed_mm_s.len(), a.optimised.len());
-        assert_eq!(a.current_a.len(), a.optimised.len());
+        assert_eq!(a.cut.len(), a.optimised.len());
+        assert_eq!(a.cut.feed_mm_s.len(), a.cut.len());
+        assert_eq!(a.cut.current_a.len(), a.cut.len());
         assert!(a.notes.is_empty(), "{:?}", a.notes);
-        // The default offset is the kerf model's λ/2, so the schedule gives the nominal current.
-        assert!((a.current_a[0] - 3.0).abs() < 1e-9, "{}", a.current_a[0]);
+        // The default offset is the kerf model's λ/2, so the schedule gives the nominal current
+        // wherever the face runs at the nominal feed (a straight cut: everywhere).
+        assert!(
+            a.cut.current_a.iter().all(|c| (c - 3.0).abs() < 1e-9),
+            "{:?}",
+            &a.cut.current_a[..3]
+        );
+        assert!(a.cut.feed_mm_s.iter().all(|f| (f - 15.0).abs() < 1e-9));
+        // A straight cut: both carriages on the section, placed at the part origin.
+        assert_eq!(a.cut.xy, a.cut.uv);
+        let origin = Vector2::new(60.0, 60.0);
+        assert!(a
+            .cut
+            .xy
+            .iter()
+            .zip(&a.optimised)
+            .all(|(m, p)| (m - (p + origin)).norm() < 1e-9));
 
         let b = plan(&small(3), |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(
-            (&a.optimised, a.final_loss, &a.current_a),
-            (&b.optimised, b.final_loss, &b.current_a)
+            (&a.optimised, a.final_loss, &a.cut),
+            (&b.optimised, b.final_loss, &b.cut)
         );
 
         let tp = a.to_toolpath("t");
         assert_eq!(tp.segments.len(), 3);
+        assert_eq!(tp.plane_separation_mm, 1000.0);
         let cut = &tp.segments[1];
         assert_eq!(cut.points.first(), cut.points.last());
+        assert_eq!(cut.secondary_points.len(), cut.points.len());
+        assert!(cut.secondary_points.iter().all(|p| p.z == 1000.0));
         assert_eq!(tp.segments[0].points.last(), cut.points.first());
         assert_eq!(tp.segments[2].points.first(), cut.points.last());
         let h = a.exposure_heat_map();
@@ -765,6 +1294,143 @@ mod tests {
         assert_eq!(m.width, 40);
         assert_eq!(m.data.len(), (m.width * m.height) as usize);
         assert_eq!(m.height as usize, a.optimised.len() - 1);
+    }
+
+    fn tapered(seed: u64) -> HotwireJob {
+        HotwireJob {
+            tip: Some(TipSection {
+                airfoil: AirfoilSource::parse("e387"),
+                chord_mm: 120.0,
+                placement: Placement {
+                    sweep_mm: 40.0,
+                    twist_deg: -3.0,
+                    pivot_chord_fraction: 0.25,
+                },
+            }),
+            span_mm: 400.0,
+            ..small(seed)
+        }
+    }
+
+    #[test]
+    fn tapered_panel_is_synchronised_projected_and_timed() {
+        let job = tapered(5);
+        let mut last = 0;
+        let p = plan(&job, |pr| {
+            assert_eq!(pr.total, 120);
+            last = pr.iteration;
+            ControlFlow::Continue(())
+        })
+        .unwrap();
+        assert_eq!((last, p.iterations), (120, 120));
+        let tip = p.tip.as_ref().expect("a tip plan");
+        assert_eq!(tip.chord_mm, 120.0);
+        assert!(p.is_feasible(Objective::default().min_clearance_mm));
+        // The slower (tip) face gets the wider kerf: offset × perimeter ratio.
+        assert!(
+            tip.offset_mm > p.offset_mm * 1.5,
+            "{} {}",
+            tip.offset_mm,
+            p.offset_mm
+        );
+        assert!(tip.optimised_stats.rms.is_finite());
+        assert_eq!(tip.optimised.len(), p.optimised.len());
+
+        // Rebuild each wire line from the carriages and check it passes the placed root and
+        // tip points on the two faces.
+        let (zr, zt, w) = (200.0, 600.0, 1000.0);
+        let origin = Vector2::new(60.0, 60.0);
+        for k in (0..p.cut.len()).step_by(7) {
+            let (xy, uv) = (p.cut.xy[k], p.cut.uv[k]);
+            let at = |z: f64| xy + (uv - xy) * (z / w);
+            assert!((at(zr) - (p.optimised[k] + origin)).norm() < 1e-9);
+            let t = job
+                .tip
+                .as_ref()
+                .unwrap()
+                .placement
+                .apply(120.0, tip.optimised[k])
+                + origin;
+            assert!((at(zt) - t).norm() < 1e-9, "{k}");
+        }
+        // Every move: the faster face at the feed (or slower when a carriage hits the limit),
+        // the carriage feed within the machine limit, the current from the face speed.
+        for k in 1..p.cut.len() {
+            let dr = (p.optimised[k] - p.optimised[k - 1]).norm();
+            let dt = (tip.optimised[k] - tip.optimised[k - 1]).norm();
+            let dxy = (p.cut.xy[k] - p.cut.xy[k - 1]).norm();
+            let duv = (p.cut.uv[k] - p.cut.uv[k - 1]).norm();
+            let f = p.cut.feed_mm_s[k];
+            assert!(f <= 25.0 + 1e-9, "{k}: {f}");
+            if dxy.max(duv) > 0.0 {
+                let duration = dxy.max(duv) / f;
+                let face = dr.max(dt) / duration;
+                assert!(face <= 15.0 + 1e-6, "{k}: face speed {face}");
+            }
+        }
+        let tp = p.to_toolpath("panel");
+        assert_ne!(tp.segments[1].points, tp.segments[1].secondary_points);
+        assert_eq!(tp.segments[0].secondary_points.len(), 2);
+    }
+
+    #[test]
+    fn out_of_travel_and_two_axis_machines_are_refused_by_name() {
+        let mut far = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        far.hotwire.as_mut().unwrap().part_origin_mm = [450.0, 60.0];
+        let e = plan(
+            &HotwireJob {
+                machine: far,
+                ..small(1)
+            },
+            |_| ControlFlow::Continue(()),
+        )
+        .unwrap_err();
+        assert!(matches!(e, JobError::Envelope { .. }), "{e}");
+        assert!(e.to_string().contains("X = "), "{e}");
+        let e = plan(
+            &HotwireJob {
+                machine: MachineProfile::resolve("hotwire_xy").unwrap(),
+                ..tapered(1)
+            },
+            |_| ControlFlow::Continue(()),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("hotwire_xy"), "{e}");
+        let e = validate(&HotwireJob {
+            span_mm: 900.0,
+            ..small(1)
+        })
+        .unwrap_err();
+        assert!(e.to_string().starts_with("span_mm"), "{e}");
+        // The same section as tip is a straight cut.
+        let straight = HotwireJob {
+            tip: Some(TipSection {
+                airfoil: AirfoilSource::parse("s1223"),
+                chord_mm: 200.0,
+                placement: Placement::ROOT,
+            }),
+            pso: PsoConfig {
+                particles: 2,
+                iterations: 2,
+                ..PsoConfig::default()
+            },
+            ..small(1)
+        };
+        let p = plan(&straight, |_| ControlFlow::Continue(())).unwrap();
+        assert!(p.tip.is_none());
+        assert_eq!(p.cut.xy, p.cut.uv);
+    }
+
+    #[test]
+    fn material_aliases_resolve() {
+        let lib = MaterialLibrary::builtin();
+        assert_eq!(
+            lib.find_foam("EPS").map(|f| f.density_kg_m3),
+            Some(26.0),
+            "EPS is the paper's H grade"
+        );
+        assert_eq!(lib.find_foam("xps").map(|f| f.density_kg_m3), Some(30.0));
+        assert!(lib.find_foam("EPP").is_none());
     }
 
     #[test]
@@ -781,7 +1447,7 @@ mod tests {
         };
         let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(p.offset_mm, FALLBACK_OFFSET_MM);
-        assert!(p.current_a.iter().all(|&a| a == 3.0));
+        assert!(p.cut.current_a.iter().all(|&a| a == 3.0));
         assert!(p.notes[0].contains("EPP"), "{:?}", p.notes);
     }
 

@@ -10,6 +10,8 @@
 //! - [`trajectory`]: the fixed-offset baseline path, its periodic cubic B-spline normal
 //!   displacement and the T ∩ G = ∅ feasibility test.
 //! - [`pso`]: seed 000 §IV.C particle swarm optimisation of the path for uniform exposure.
+//! - [`wing`]: beyond the paper's 2-D cut: tapered, swept, twisted panels on a 4-axis cutter
+//!   (root/tip synchronisation, projection onto the carriage planes, move timing).
 //! - [`job`]: one planning job end to end (foil → offset → baseline → swarm → plan), with its
 //!   `Toolpath` and `HeatMap` views.
 //! - [`node`]: the `planner` ROS 2 node serving the `plan_hotwire` action.
@@ -25,3 +27,4 @@ pub mod kerf;
 pub mod node;
 pub mod pso;
 pub mod trajectory;
+pub mod wing;

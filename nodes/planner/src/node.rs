@@ -9,8 +9,9 @@
 //! result. A failed job ends its goal as aborted with the error; the node keeps serving.
 //! Goals are planned one at a time, in arrival order.
 //!
-//! Today only the root section is planned (z = 0, no tip points); goal fields for the tip and
-//! the machine profile are accepted and reported as ignored.
+//! A goal naming a tip (airfoil, chord, twist or sweep) plans a tapered panel on a 4-axis
+//! machine; the toolpath is in the machine profile's carriage coordinates. A cancel request
+//! for the executing goal stops the swarm within one iteration and ends the goal as canceled.
 
 use std::{
     ops::ControlFlow,
@@ -25,8 +26,11 @@ use cell_msgs::{HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult
 use cell_runtime::{action::GoalEndStatus, CellNode, QosPreset};
 use serde::{Deserialize, Serialize};
 
-use crate::job::{self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress};
+use cell_profiles::MachineProfile;
+
+use crate::job::{self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress, TipSection};
 use crate::pso::PsoConfig;
+use crate::wing::Placement;
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -34,12 +38,15 @@ use crate::pso::PsoConfig;
 pub struct PlannerParams {
     /// Foam id used when a goal's `material` is empty.
     pub default_material: String,
-    /// Wire id from the material library.
-    pub wire: String,
+    /// Machine profile used when a goal's `machine_profile` is empty: a name under
+    /// `config/machines` or a path to a profile YAML (it gives the wire, supply and travel).
+    pub machine_profile: String,
+    /// Panel span [mm] when a goal's `span_mm` is 0.
+    pub span_mm: f64,
+    /// Tip twist pivot as a fraction of the tip chord from its LE.
+    pub twist_pivot_chord_fraction: f64,
     /// Nominal wire current [A] (sets the default offset; constant current as a fallback).
     pub current_a: f64,
-    /// Supply current limit [A] for the current schedule.
-    pub max_current_a: f64,
     /// Cutting feed [mm/s].
     pub feed_mm_s: f64,
     /// Straight lead-in / lead-out length behind the trailing edge [mm].
@@ -66,9 +73,10 @@ impl Default for PlannerParams {
         let job = HotwireJob::default();
         Self {
             default_material: job.material,
-            wire: job.wire,
+            machine_profile: job.machine.name,
+            span_mm: job.span_mm,
+            twist_pivot_chord_fraction: Placement::ROOT.pivot_chord_fraction,
             current_a: job.current_a,
-            max_current_a: job.supply.max_a,
             feed_mm_s: job.feed_mm_s,
             lead_in_mm: job.lead_in_mm,
             panels: job.panels,
@@ -84,24 +92,62 @@ impl Default for PlannerParams {
 
 /// The job a goal asks for, or why it cannot be planned (one line).
 ///
+/// Empty or zero goal fields take the parameters' or the root's values: `tip_airfoil` empty
+/// and `tip_chord_mm` 0 mean the root's, `span_mm` 0 and `machine_profile` empty the
+/// parameters'.
+///
 /// # Errors
-/// A chord that is not > 0, an airfoil that does not resolve or load, other invalid values.
+/// A chord that is not > 0, an airfoil or machine profile that does not resolve or load,
+/// other invalid values.
 pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJob, String> {
     let defaults = HotwireJob::default();
+    if goal.root_airfoil.is_empty() {
+        return Err("root_airfoil is empty".into());
+    }
+    let machine_name = if goal.machine_profile.is_empty() {
+        &p.machine_profile
+    } else {
+        &goal.machine_profile
+    };
+    let machine = MachineProfile::resolve(machine_name).map_err(|e| e.to_string())?;
+    let root_airfoil = AirfoilSource::parse(&goal.root_airfoil);
+    let tapered = !goal.tip_airfoil.is_empty()
+        || goal.tip_chord_mm != 0.0
+        || goal.tip_twist_deg != 0.0
+        || goal.tip_sweep_mm != 0.0;
+    let tip = tapered.then(|| TipSection {
+        airfoil: if goal.tip_airfoil.is_empty() {
+            root_airfoil.clone()
+        } else {
+            AirfoilSource::parse(&goal.tip_airfoil)
+        },
+        chord_mm: if goal.tip_chord_mm == 0.0 {
+            goal.root_chord_mm
+        } else {
+            goal.tip_chord_mm
+        },
+        placement: Placement {
+            sweep_mm: goal.tip_sweep_mm,
+            twist_deg: goal.tip_twist_deg,
+            pivot_chord_fraction: p.twist_pivot_chord_fraction,
+        },
+    });
     let job = HotwireJob {
-        root_airfoil: AirfoilSource::parse(&goal.root_airfoil),
+        root_airfoil,
         chord_mm: goal.root_chord_mm,
+        tip,
+        span_mm: if goal.span_mm == 0.0 {
+            p.span_mm
+        } else {
+            goal.span_mm
+        },
+        machine,
         material: if goal.material.is_empty() {
             p.default_material.clone()
         } else {
             goal.material.clone()
         },
-        wire: p.wire.clone(),
         current_a: p.current_a,
-        supply: crate::kerf::CurrentLimits {
-            min_a: 0.0,
-            max_a: p.max_current_a,
-        },
         cse: (goal.cse > 0.0).then_some(goal.cse),
         panels: p.panels,
         pso: PsoConfig {
@@ -119,35 +165,13 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
         lead_in_mm: p.lead_in_mm,
         ..defaults
     };
-    if goal.root_airfoil.is_empty() {
-        return Err("root_airfoil is empty".into());
-    }
     job::validate(&job).map_err(|e| e.to_string())?;
     job.pso.validate().map_err(|e| e.to_string())?;
     job.root_airfoil.load().map_err(|e| e.to_string())?;
+    if let Some(t) = &job.tip {
+        t.airfoil.load().map_err(|e| e.to_string())?;
+    }
     Ok(job)
-}
-
-/// Goal fields this version does not plan yet, for the result message.
-fn ignored_fields(goal: &PlanHotwireGoal) -> Vec<&'static str> {
-    let mut out = Vec::new();
-    if !goal.tip_airfoil.is_empty() {
-        out.push("tip_airfoil");
-    }
-    for (name, v) in [
-        ("tip_chord_mm", goal.tip_chord_mm),
-        ("tip_twist_deg", goal.tip_twist_deg),
-        ("tip_sweep_mm", goal.tip_sweep_mm),
-        ("span_mm", goal.span_mm),
-    ] {
-        if v != 0.0 {
-            out.push(name);
-        }
-    }
-    if !goal.machine_profile.is_empty() {
-        out.push("machine_profile");
-    }
-    out
 }
 
 /// What the planning thread reports to the node.
@@ -157,7 +181,7 @@ enum Update {
 }
 
 /// The result message of a finished plan.
-fn summary(job_id: &str, job: &HotwireJob, plan: &HotwirePlan, ignored: &[&str]) -> String {
+fn summary(job_id: &str, job: &HotwireJob, plan: &HotwirePlan) -> String {
     let mut msg = format!(
         "planned {job_id}: {} at {} mm, loss {:.4e} -> {:.4e}, RMS {:.4} -> {:.4} \
          ({} iterations, {:.1} s, seed {})",
@@ -171,15 +195,15 @@ fn summary(job_id: &str, job: &HotwireJob, plan: &HotwirePlan, ignored: &[&str])
         plan.seconds,
         plan.seed
     );
+    if let Some(t) = &plan.tip {
+        msg.push_str(&format!(
+            "; tip {} at {} mm: RMS {:.4} -> {:.4}",
+            t.airfoil, t.chord_mm, t.baseline_stats.rms, t.optimised_stats.rms
+        ));
+    }
     for note in &plan.notes {
         msg.push_str("; ");
         msg.push_str(note);
-    }
-    if !ignored.is_empty() {
-        msg.push_str(&format!(
-            "; root section only, ignored: {}",
-            ignored.join(", ")
-        ));
     }
     msg
 }
@@ -243,6 +267,15 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                     continue;
                 }
             },
+            c = server.receive_cancel_request() => {
+                // Nothing is executing: whatever it names is not cancellable.
+                if let Ok(c) = c {
+                    if let Err(e) = server.respond_to_cancel_requests(&c, std::iter::empty()).await {
+                        tracing::warn!("plan_hotwire: cancel response: {e:?}");
+                    }
+                }
+                continue;
+            }
             _ = node.shutdown().requested() => return Ok(()),
         };
         let Some(goal) = server.get_new_goal(handle.clone()) else {
@@ -312,6 +345,7 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
             })
         };
         let mut latest: Option<HeatMap> = None;
+        let mut cancelled = false;
         let period = Duration::from_secs_f64(if p.exposure_period_s > 0.0 {
             p.exposure_period_s
         } else {
@@ -343,6 +377,20 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                         exposure.publish(h.clone()).await?;
                     }
                 }
+                c = server.receive_cancel_request() => {
+                    let Ok(c) = c else { continue };
+                    let goal_id = executing.goal_id();
+                    let ours = c.contains_goal(&goal_id);
+                    if ours {
+                        tracing::info!("plan_hotwire: cancelling {job_id}");
+                        cancelled = true;
+                        stop.store(true, Ordering::Relaxed);
+                    }
+                    let accepted = ours.then_some(goal_id).into_iter();
+                    if let Err(e) = server.respond_to_cancel_requests(&c, accepted).await {
+                        tracing::warn!("plan_hotwire: cancel response {job_id}: {e:?}");
+                    }
+                }
                 _ = node.shutdown().requested(), if !stop.load(Ordering::Relaxed) => {
                     stop.store(true, Ordering::Relaxed);
                 }
@@ -362,7 +410,7 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                     Err(e) => tracing::warn!("plan_hotwire: {job_id}: exposure matrix: {e}"),
                 }
                 log_to_rerun(&node, &plan, &toolpath, &profile);
-                let message = summary(&job_id, &job, &plan, &ignored_fields(&goal));
+                let message = summary(&job_id, &job, &plan);
                 tracing::info!("plan_hotwire: {message}");
                 (
                     GoalEndStatus::Succeeded,
@@ -372,6 +420,18 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                         toolpath,
                         final_loss: plan.final_loss,
                         baseline_loss: plan.baseline_loss,
+                    },
+                )
+            }
+            Err(e @ job::JobError::Cancelled { .. }) if cancelled => {
+                let message = format!("{job_id}: {e} at the client's request");
+                tracing::info!("plan_hotwire: {message}");
+                (
+                    GoalEndStatus::Canceled,
+                    PlanHotwireResult {
+                        success: false,
+                        message,
+                        ..Default::default()
                     },
                 )
             }
@@ -402,7 +462,7 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                 Err(_) => tracing::warn!("plan_hotwire: nobody asked for the result of {job_id}"),
             }
         });
-        if stop.load(Ordering::Relaxed) {
+        if stop.load(Ordering::Relaxed) && !cancelled {
             return Ok(());
         }
     }
@@ -455,5 +515,33 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.contains("nope"), "{e}");
+        let tapered = PlanHotwireGoal {
+            root_airfoil: "s1223".into(),
+            root_chord_mm: 150.0,
+            tip_chord_mm: 100.0,
+            ..Default::default()
+        };
+        let job = goal_to_job(&tapered, &p).unwrap();
+        let tip = job.tip.as_ref().unwrap();
+        assert_eq!((tip.chord_mm, &tip.airfoil), (100.0, &job.root_airfoil));
+        assert_eq!(job.span_mm, p.span_mm);
+        let e = goal_to_job(
+            &PlanHotwireGoal {
+                machine_profile: "hotwire_xy".into(),
+                ..tapered.clone()
+            },
+            &p,
+        )
+        .unwrap_err();
+        assert!(e.contains("4-axis"), "{e}");
+        let e = goal_to_job(
+            &PlanHotwireGoal {
+                machine_profile: "mill_9000".into(),
+                ..tapered
+            },
+            &p,
+        )
+        .unwrap_err();
+        assert!(e.contains("mill_9000"), "{e}");
     }
 }

@@ -65,6 +65,9 @@ pub struct Foam {
     pub volume_specific_energy_j_m3: Option<f64>,
     /// Relative standard deviation of the energy (0.10 for the paper's foams).
     pub sd_fraction: f64,
+    /// Other names users call this foam by (e.g. `EPS`), matched case-insensitively.
+    #[serde(default)]
+    pub aliases: Vec<String>,
 }
 
 impl Foam {
@@ -168,6 +171,39 @@ impl MaterialLibrary {
         self.wires.get(id)
     }
 
+    /// A foam by id or alias, case-insensitive (what users type: `EPS`, `xps`, `eps_h_grade`).
+    pub fn find_foam(&self, name: &str) -> Option<&Foam> {
+        self.foams
+            .iter()
+            .find(|(id, f)| {
+                id.eq_ignore_ascii_case(name)
+                    || f.aliases.iter().any(|a| a.eq_ignore_ascii_case(name))
+            })
+            .map(|(_, f)| f)
+    }
+
+    /// A wire by id, case-insensitive.
+    pub fn find_wire(&self, name: &str) -> Option<&Wire> {
+        self.wires
+            .iter()
+            .find(|(id, _)| id.eq_ignore_ascii_case(name))
+            .map(|(_, w)| w)
+    }
+
+    /// Every name [`MaterialLibrary::find_foam`] accepts: ids, then aliases in parentheses.
+    pub fn foam_names(&self) -> Vec<String> {
+        self.foams
+            .iter()
+            .map(|(id, f)| {
+                if f.aliases.is_empty() {
+                    id.clone()
+                } else {
+                    format!("{id} ({})", f.aliases.join(", "))
+                }
+            })
+            .collect()
+    }
+
     /// Checks every value: densities, energies, diameters and resistances finite and > 0, at
     /// least one energy per foam (both within 1 % of each other by eq. 6 if both are given),
     /// `sd_fraction` in [0, 1).
@@ -220,6 +256,19 @@ impl MaterialLibrary {
                     key("sd_fraction"),
                     format!("{} must be in [0, 1)", f.sd_fraction),
                 ));
+            }
+        }
+        let mut names: Vec<(String, String)> = Vec::new();
+        for (id, f) in &self.foams {
+            for name in std::iter::once(id).chain(&f.aliases) {
+                let lower = name.to_ascii_lowercase();
+                if let Some((_, owner)) = names.iter().find(|(n, _)| *n == lower) {
+                    return Err(invalid(
+                        format!("foams.{id}.aliases"),
+                        format!("{name:?} already names foams.{owner}"),
+                    ));
+                }
+                names.push((lower, id.clone()));
             }
         }
         for (id, w) in &self.wires {

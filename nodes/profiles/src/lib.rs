@@ -1,0 +1,407 @@
+//! Machine profiles: what a machine in the cell can do, read from `config/machines/*.yaml`.
+//!
+//! A profile names the machine's axes and their travel, its feed limit and the geometry of its
+//! process (for a hot-wire cutter: the tower separation and where the foam block sits). The
+//! planner checks its paths against it; the emitter and the bridge read the same file, so one
+//! file describes one machine.
+//!
+//! Every key is checked: an unknown or mistyped key, or a value out of range, is an error that
+//! names the file and the field (and the line, for YAML syntax and unknown keys).
+//!
+//! ```
+//! let profile = cell_profiles::MachineProfile::resolve("hotwire_xyuv").unwrap();
+//! assert!(profile.is_four_axis_hotwire());
+//! assert!(profile.check_position(&[('X', 10.0), ('U', 700.0)]).is_err());
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The profiles shipped in `config/machines/`, compiled in: (name, YAML text).
+pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
+    (
+        "hotwire_xy",
+        include_str!("../../../config/machines/hotwire_xy.yaml"),
+    ),
+    (
+        "hotwire_xyuv",
+        include_str!("../../../config/machines/hotwire_xyuv.yaml"),
+    ),
+];
+
+/// A rejected or unreadable profile. Messages are one line and name the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ProfileError {
+    /// The file could not be read.
+    #[error("{file}: {source}")]
+    Io {
+        /// The path.
+        file: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// YAML syntax, a missing or unknown key, or a value of the wrong type.
+    #[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Parse {
+        /// The file.
+        file: String,
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// The parser's message (names the key).
+        message: String,
+    },
+    /// A value out of its domain.
+    #[error("{file}: {field}: {reason}")]
+    Invalid {
+        /// The file.
+        file: String,
+        /// Dotted key path, e.g. `hotwire.tower_separation_mm`.
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A name that is neither an embedded profile nor a file.
+    #[error(
+        "machine profile {name:?} is not a known name (known: {}) nor a .yaml path",
+        EMBEDDED_PROFILES.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+    )]
+    Unknown {
+        /// The name given.
+        name: String,
+    },
+}
+
+/// The process a machine runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Process {
+    /// Hot-wire foam cutting (needs a `hotwire` section).
+    Hotwire,
+    /// Laser or plasma sheet cutting.
+    SheetCut,
+    /// Wire-arc additive manufacturing.
+    Waam,
+    /// Material-extrusion printing.
+    Extrusion,
+}
+
+/// Hot-wire cutter geometry: two carriages (XY and, on a 4-axis machine, UV) hold the wire
+/// ends in two parallel planes; the foam block sits between them.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct HotwireGeometry {
+    /// Distance between the XY and UV carriage planes along the wire, mm.
+    pub tower_separation_mm: f64,
+    /// Distance from the XY plane to the block's root face, mm (the tip face is a panel span
+    /// further).
+    pub root_plane_mm: f64,
+    /// Where the root section's leading edge sits in XY machine coordinates, mm.
+    pub part_origin_mm: [f64; 2],
+    /// Wire id in the material library (`config/materials/wires.yaml`).
+    pub wire: String,
+    /// The wire supply's current range [min, max], A.
+    pub supply_a: [f64; 2],
+}
+
+/// One machine (module docs).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineProfile {
+    /// Profile name (what goals and parameters refer to).
+    pub name: String,
+    /// One line for people.
+    #[serde(default)]
+    pub description: String,
+    /// The process this machine runs.
+    pub process: Process,
+    /// Axis letter → travel [min, max] in machine coordinates, mm (degrees for rotary axes).
+    pub axes: BTreeMap<char, [f64; 2]>,
+    /// Fastest programmed feed of any axis, mm/s.
+    pub max_feed_mm_s: f64,
+    /// Hot-wire geometry; required when `process` is `hotwire`.
+    #[serde(default)]
+    pub hotwire: Option<HotwireGeometry>,
+}
+
+/// A position outside a machine's travel.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{axis} = {value:.3} mm is outside the travel {min}..{max} mm of machine {machine:?}")]
+pub struct EnvelopeViolation {
+    /// The machine.
+    pub machine: String,
+    /// The axis letter.
+    pub axis: char,
+    /// The commanded value.
+    pub value: f64,
+    /// Travel minimum.
+    pub min: f64,
+    /// Travel maximum.
+    pub max: f64,
+}
+
+impl MachineProfile {
+    /// An embedded profile by name (case-insensitive), else a file path (a name containing a
+    /// path separator or ending in `.yaml`/`.yml`, or an existing file).
+    ///
+    /// # Errors
+    /// [`ProfileError::Unknown`] for an unknown name; as [`MachineProfile::load`] for a file.
+    pub fn resolve(name_or_path: &str) -> Result<Self, ProfileError> {
+        let lower = name_or_path.to_ascii_lowercase();
+        let looks_like_path = name_or_path.contains('/')
+            || name_or_path.contains(std::path::MAIN_SEPARATOR)
+            || lower.ends_with(".yaml")
+            || lower.ends_with(".yml");
+        if let Some((name, text)) = EMBEDDED_PROFILES
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(name_or_path))
+            .filter(|_| !looks_like_path)
+        {
+            return Self::from_yaml_str(text, &format!("config/machines/{name}.yaml"));
+        }
+        if looks_like_path || Path::new(name_or_path).is_file() {
+            return Self::load(PathBuf::from(name_or_path));
+        }
+        Err(ProfileError::Unknown {
+            name: name_or_path.into(),
+        })
+    }
+
+    /// Reads and checks a profile file.
+    ///
+    /// # Errors
+    /// [`ProfileError::Io`], or as [`MachineProfile::from_yaml_str`].
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ProfileError> {
+        let file = path.as_ref().display().to_string();
+        let text = std::fs::read_to_string(path.as_ref()).map_err(|source| ProfileError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Self::from_yaml_str(&text, &file)
+    }
+
+    /// Parses and checks a profile; `source_name` names it in errors.
+    ///
+    /// # Errors
+    /// [`ProfileError::Parse`] (syntax, unknown or missing keys, wrong types) or
+    /// [`ProfileError::Invalid`] (see [`MachineProfile::validate`]).
+    pub fn from_yaml_str(text: &str, source_name: &str) -> Result<Self, ProfileError> {
+        let profile: Self = serde_norway::from_str(text).map_err(|e| ProfileError::Parse {
+            file: source_name.into(),
+            line: e.location().map(|l| l.line()),
+            message: e.to_string(),
+        })?;
+        profile.validate(source_name)?;
+        Ok(profile)
+    }
+
+    /// Checks the values: axis letters A–Z with finite min < max, a positive feed limit, and
+    /// for a hot-wire machine a `hotwire` section with axes X and Y (plus both or neither of
+    /// U and V), a positive tower separation, the root face between the towers and a supply
+    /// range 0 ≤ min ≤ max.
+    ///
+    /// # Errors
+    /// [`ProfileError::Invalid`] naming `source_name` and the field.
+    pub fn validate(&self, source_name: &str) -> Result<(), ProfileError> {
+        let invalid = |field: &str, reason: String| ProfileError::Invalid {
+            file: source_name.into(),
+            field: field.into(),
+            reason,
+        };
+        if self.axes.is_empty() {
+            return Err(invalid("axes", "at least one axis is needed".into()));
+        }
+        for (&axis, &[min, max]) in &self.axes {
+            if !axis.is_ascii_uppercase() {
+                return Err(invalid(
+                    &format!("axes.{axis}"),
+                    "axis letters are A-Z".into(),
+                ));
+            }
+            if !(min.is_finite() && max.is_finite() && min < max) {
+                return Err(invalid(
+                    &format!("axes.{axis}"),
+                    format!("[{min}, {max}] must be finite with min < max"),
+                ));
+            }
+        }
+        if !(self.max_feed_mm_s.is_finite() && self.max_feed_mm_s > 0.0) {
+            return Err(invalid(
+                "max_feed_mm_s",
+                format!("{} must be finite and > 0", self.max_feed_mm_s),
+            ));
+        }
+        match (&self.hotwire, self.process) {
+            (None, Process::Hotwire) => {
+                return Err(invalid(
+                    "hotwire",
+                    "a hot-wire machine needs a hotwire section".into(),
+                ))
+            }
+            (Some(_), p) if p != Process::Hotwire => {
+                return Err(invalid(
+                    "hotwire",
+                    format!("only a hot-wire machine has a hotwire section (process is {p:?})"),
+                ))
+            }
+            _ => {}
+        }
+        if let Some(h) = &self.hotwire {
+            for axis in ['X', 'Y'] {
+                if !self.axes.contains_key(&axis) {
+                    return Err(invalid(
+                        "axes",
+                        format!("a hot-wire machine needs axis {axis}"),
+                    ));
+                }
+            }
+            if self.axes.contains_key(&'U') != self.axes.contains_key(&'V') {
+                return Err(invalid(
+                    "axes",
+                    "a 4-axis hot-wire machine needs both U and V".into(),
+                ));
+            }
+            if !(h.tower_separation_mm.is_finite() && h.tower_separation_mm > 0.0) {
+                return Err(invalid(
+                    "hotwire.tower_separation_mm",
+                    format!("{} must be finite and > 0", h.tower_separation_mm),
+                ));
+            }
+            if !(h.root_plane_mm.is_finite()
+                && (0.0..h.tower_separation_mm).contains(&h.root_plane_mm))
+            {
+                return Err(invalid(
+                    "hotwire.root_plane_mm",
+                    format!(
+                        "{} must lie in [0, tower_separation_mm = {})",
+                        h.root_plane_mm, h.tower_separation_mm
+                    ),
+                ));
+            }
+            if !h.part_origin_mm.iter().all(|v| v.is_finite()) {
+                return Err(invalid("hotwire.part_origin_mm", "must be finite".into()));
+            }
+            let [lo, hi] = h.supply_a;
+            if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi && hi > 0.0) {
+                return Err(invalid(
+                    "hotwire.supply_a",
+                    format!("[{lo}, {hi}] must satisfy 0 <= min <= max, max > 0"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// True for a hot-wire machine with a UV carriage (tapered panels possible).
+    pub fn is_four_axis_hotwire(&self) -> bool {
+        self.hotwire.is_some() && self.axes.contains_key(&'U')
+    }
+
+    /// Checks one position given as (axis, value) pairs against the travel. Axes the machine
+    /// does not have are an error too (reported with an empty travel 0..0).
+    ///
+    /// # Errors
+    /// The first axis out of travel.
+    pub fn check_position(&self, position: &[(char, f64)]) -> Result<(), EnvelopeViolation> {
+        for &(axis, value) in position {
+            let travel = self.axes.get(&axis).copied();
+            let [min, max] = travel.unwrap_or([0.0, 0.0]);
+            // A thousandth of a millimetre of slack: values that round onto the limit pass.
+            let slack = 1e-3;
+            if !(travel.is_some() && value >= min - slack && value <= max + slack) {
+                return Err(EnvelopeViolation {
+                    machine: self.name.clone(),
+                    axis,
+                    value,
+                    min,
+                    max,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_profiles_load_and_resolve_case_insensitively() {
+        for (name, _) in EMBEDDED_PROFILES {
+            let p = MachineProfile::resolve(name).unwrap();
+            assert_eq!(&p.name, name);
+        }
+        assert!(MachineProfile::resolve("HOTWIRE_XYUV")
+            .unwrap()
+            .is_four_axis_hotwire());
+        assert!(!MachineProfile::resolve("hotwire_xy")
+            .unwrap()
+            .is_four_axis_hotwire());
+        let e = MachineProfile::resolve("nope").unwrap_err();
+        assert!(e.to_string().contains("hotwire_xyuv"), "{e}");
+        let e = MachineProfile::resolve("/nonexistent/m.yaml").unwrap_err();
+        assert!(e.to_string().starts_with("/nonexistent/m.yaml"), "{e}");
+    }
+
+    fn base() -> String {
+        EMBEDDED_PROFILES[1].1.to_string()
+    }
+
+    #[test]
+    fn a_mistyped_key_names_the_key_and_line() {
+        let text = base().replace("root_plane_mm:", "root_plane:");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.starts_with("m.yaml:"), "{msg}");
+        assert!(msg.contains("root_plane"), "{msg}");
+        assert!(matches!(e, ProfileError::Parse { line: Some(_), .. }));
+    }
+
+    #[test]
+    fn out_of_range_values_name_the_field() {
+        for (from, to, field) in [
+            (
+                "tower_separation_mm: 1000.0",
+                "tower_separation_mm: -1",
+                "hotwire.tower_separation_mm",
+            ),
+            (
+                "root_plane_mm: 200.0",
+                "root_plane_mm: 1200.0",
+                "hotwire.root_plane_mm",
+            ),
+            ("X: [0.0, 600.0]", "X: [600.0, 0.0]", "axes.X"),
+            ("max_feed_mm_s: 25.0", "max_feed_mm_s: 0", "max_feed_mm_s"),
+            (
+                "supply_a: [0.0, 10.0]",
+                "supply_a: [5.0, 1.0]",
+                "hotwire.supply_a",
+            ),
+            ("  V: [0.0, 300.0]\n", "", "axes"),
+        ] {
+            let text = base().replace(from, to);
+            assert_ne!(text, base(), "{from}");
+            let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+            assert!(
+                matches!(&e, ProfileError::Invalid { field: f, .. } if f == field),
+                "{from}: {e}"
+            );
+        }
+        let text = base().replace("process: hotwire", "process: waam");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        assert!(e.to_string().contains("hotwire"), "{e}");
+    }
+
+    #[test]
+    fn envelope_check_names_the_axis() {
+        let p = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        assert!(p
+            .check_position(&[('X', 0.0), ('Y', 300.0), ('U', 600.0), ('V', 0.0)])
+            .is_ok());
+        let e = p.check_position(&[('X', 10.0), ('V', -0.5)]).unwrap_err();
+        assert_eq!((e.axis, e.value), ('V', -0.5));
+        assert!(e.to_string().contains("V = -0.500"), "{e}");
+        assert!(p.check_position(&[('Z', 1.0)]).is_err());
+        assert!(p.check_position(&[('X', f64::NAN)]).is_err());
+    }
+}
