@@ -212,6 +212,16 @@ fn cell_hotwire_writes_trajectory_and_report() {
     assert_eq!(report["chord_mm"], 150.0);
     assert!(report["material"].is_string());
     assert!(report["baseline"]["cv"].is_number() && report["seconds"].is_number());
+    // The CSE calibration table: the chord grows with the CSE assumed for the material.
+    let rows = report["calibration"].as_array().unwrap();
+    assert_eq!(rows.len(), 11);
+    let chords: Vec<f64> = rows
+        .iter()
+        .map(|r| r["baseline"]["chord_mm"].as_f64().unwrap())
+        .collect();
+    // Monotone up to the 0.05 mm trailing-edge search step.
+    assert!(chords.windows(2).all(|w| w[1] >= w[0] - 0.1), "{chords:?}");
+    assert!(chords[0] < chords[10] && chords[10] <= 151.0, "{chords:?}");
 }
 
 #[test]

@@ -9,7 +9,9 @@
 use std::{fmt::Write as _, ops::ControlFlow, path::PathBuf, process::ExitCode};
 
 use cell_planner::{
+    calibration,
     job::{self, AirfoilSource, ExposureStats, HotwireJob, HotwirePlan, TipSection},
+    kerf::MaterialLibrary,
     pso::PsoConfig,
     wing::Placement,
 };
@@ -56,6 +58,14 @@ pub struct HotwireArgs {
     /// Cutting feed of the faster foam face [mm/s].
     #[arg(long, value_name = "MM_S")]
     pub feed: Option<f64>,
+    /// CSE values for the calibration table in report.json (seed 000 §IV.D; default: 0.5 to
+    /// 1.5 times the plan's CSE in 11 steps).
+    #[arg(long, value_name = "CSE,…", value_delimiter = ',')]
+    pub calibrate: Vec<f64>,
+    /// Chord [mm] measured on a test cut of the fixed-offset (baseline) path: reports the CSE
+    /// it implies from the calibration table.
+    #[arg(long, value_name = "MM")]
+    pub test_cut_chord: Option<f64>,
     /// PSO iterations (default: the paper's 8000).
     #[arg(long, value_name = "N")]
     pub iterations: Option<usize>,
@@ -104,6 +114,10 @@ pub struct Report {
     pub seed: u64,
     /// Machine profile name.
     pub machine: String,
+    /// Predicted root chord for each material CSE, for the baseline and the optimised path.
+    pub calibration: Vec<job::CalibrationRow>,
+    /// The CSE a measured test-cut chord (`--test-cut-chord`) implies, if within the table.
+    pub estimated_cse: Option<f64>,
     /// The tip section of a tapered panel.
     pub tip: Option<TipReport>,
     /// Fallbacks and warnings.
@@ -271,6 +285,33 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         Ok(plan) => plan,
         Err(e) => return failure(e),
     };
+    let cse_values = if a.calibrate.is_empty() {
+        (0..=10)
+            .map(|k| plan.cse * (0.5 + 0.1 * k as f64))
+            .collect()
+    } else {
+        a.calibrate.clone()
+    };
+    let wire_radius_mm = job
+        .machine
+        .hotwire
+        .as_ref()
+        .and_then(|h| MaterialLibrary::builtin().find_wire(&h.wire).cloned())
+        .map_or(0.18, |w| w.diameter_m / 2.0 * 1e3);
+    let calibration = match plan.chord_predictions(&cse_values, wire_radius_mm) {
+        Ok(rows) => rows,
+        Err(e) => return failure(format!("calibration: {e}")),
+    };
+    let baseline_rows: Vec<_> = calibration.iter().map(|r| r.baseline).collect();
+    let estimated_cse = a
+        .test_cut_chord
+        .and_then(|c| calibration::cse_for_chord(&baseline_rows, c));
+    if let (Some(c), None) = (a.test_cut_chord, estimated_cse) {
+        eprintln!(
+            "note: --test-cut-chord {c} mm lies outside the predicted chords of the CSE sweep; \
+             widen it with --calibrate"
+        );
+    }
     let report = Report {
         airfoil: a.airfoil.clone(),
         airfoil_name: plan.airfoil.clone(),
@@ -286,6 +327,8 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         seconds: plan.seconds,
         seed: plan.seed,
         machine: plan.machine.clone(),
+        calibration,
+        estimated_cse,
         tip: plan.tip.as_ref().map(|t| TipReport {
             airfoil_name: t.airfoil.clone(),
             chord_mm: t.chord_mm,
@@ -311,6 +354,9 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     }
     for note in &plan.notes {
         eprintln!("note: {note}");
+    }
+    if let (Some(chord), Some(cse)) = (a.test_cut_chord, report.estimated_cse) {
+        println!("a {chord} mm test cut of the baseline path implies CSE ≈ {cse:.4}");
     }
     let tip = plan.tip.as_ref().map_or(String::new(), |t| {
         format!(

@@ -24,6 +24,7 @@ use cell_profiles::{EnvelopeViolation, HotwireGeometry, MachineProfile};
 use nalgebra::{Point2, Vector2};
 
 use crate::airfoil::{Airfoil, AirfoilError, SyncedPoints};
+use crate::calibration::{predict_chords, ChordPrediction, Sweep};
 use crate::exposure::{coefficient_of_variation, DistanceLaw, ExposureModel, Panels};
 use crate::kerf::{self, CurrentLimits, MaterialLibrary};
 use crate::pso::{self, Objective, Problem, PsoConfig, PsoError};
@@ -298,6 +299,17 @@ impl ExposureStats {
             cv: coefficient_of_variation(exposure),
         }
     }
+}
+
+/// One row of [`HotwirePlan::chord_predictions`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CalibrationRow {
+    /// The material CSE assumed.
+    pub cse: f64,
+    /// What a cut along the fixed-offset baseline would leave.
+    pub baseline: ChordPrediction,
+    /// What a cut along the optimised path would leave.
+    pub optimised: ChordPrediction,
 }
 
 /// One section's plan, in the section's own frame (LE at the origin, chord along +x; mm).
@@ -1123,6 +1135,55 @@ impl HotwirePlan {
                 segment(ToolpathSegment::KIND_LEAD, &self.lead_out),
             ],
         }
+    }
+
+    /// The root chord a cut along the baseline and along the optimised path would leave for each
+    /// material CSE of `cse_values` ([`crate::calibration`], seed 000 §IV.D), with
+    /// `wire_radius_mm` as the closest the surface can come to the wire centre.
+    ///
+    /// # Errors
+    /// The exposure model's (not expected for a plan from [`plan`]).
+    pub fn chord_predictions(
+        &self,
+        cse_values: &[f64],
+        wire_radius_mm: f64,
+    ) -> Result<Vec<CalibrationRow>, JobError> {
+        let wrap = |e: crate::exposure::ExposureError| JobError::Plan {
+            airfoil: self.airfoil.clone(),
+            source: e.into(),
+        };
+        let sweep = Sweep {
+            wire_radius_mm,
+            ..Sweep::default()
+        };
+        let chord = self
+            .foil
+            .iter()
+            .map(|p| p.x)
+            .fold(f64::NEG_INFINITY, f64::max)
+            - self.foil.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+        let predict = |path: &[Point2<f64>]| {
+            predict_chords(
+                &self.model,
+                &self.surface,
+                path,
+                self.offset_mm,
+                chord,
+                cse_values,
+                &sweep,
+            )
+            .map_err(wrap)
+        };
+        let (baseline, optimised) = (predict(&self.baseline)?, predict(&self.optimised)?);
+        Ok(baseline
+            .into_iter()
+            .zip(optimised)
+            .map(|(baseline, optimised)| CalibrationRow {
+                cse: baseline.cse,
+                baseline,
+                optimised,
+            })
+            .collect())
     }
 
     /// The optimised exposure along the foil as a 1 × N raster (`exposure_profile`, one cell

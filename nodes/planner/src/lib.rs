@@ -10,6 +10,8 @@
 //! - [`trajectory`]: the fixed-offset baseline path, its periodic cubic B-spline normal
 //!   displacement and the T ∩ G = ∅ feasibility test.
 //! - [`pso`]: seed 000 §IV.C particle swarm optimisation of the path for uniform exposure.
+//! - [`calibration`]: seed 000 §IV.D CSE calibration: the chord a path leaves for each CSE of a
+//!   sweep, and the CSE a measured test-cut chord implies.
 //! - [`wing`]: beyond the paper's 2-D cut: tapered, swept, twisted panels on a 4-axis cutter
 //!   (root/tip synchronisation, projection onto the carriage planes, move timing).
 //! - [`job`]: one planning job end to end (foil → offset → baseline → swarm → plan), with its
@@ -21,6 +23,7 @@
 #![warn(missing_docs)]
 
 pub mod airfoil;
+pub mod calibration;
 pub mod exposure;
 pub mod job;
 pub mod kerf;
