@@ -5,7 +5,7 @@
 mod common;
 
 use cell_msgs::{
-    PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath, ToolpathSegment,
+    HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath, ToolpathSegment,
 };
 use cell_planner::node::{run, PlannerParams};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
@@ -28,6 +28,9 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
 
     let mut toolpaths = client_node
         .subscriber::<Toolpath>("/toolpath", QosPreset::Plan)
+        .unwrap();
+    let mut matrices = client_node
+        .subscriber::<HeatMap>("/exposure_matrix", QosPreset::Stream)
         .unwrap();
     let client = client_node
         .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
@@ -86,6 +89,12 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
     assert_eq!(cut.points.first(), cut.points.last(), "CUT is closed");
     assert_eq!(cut.feed_mm_s.len(), cut.points.len());
     assert_eq!(cut.power.len(), cut.points.len());
+
+    let matrix = within(matrices.recv())
+        .await
+        .expect("exposure matrix topic");
+    assert_eq!(matrix.message.quantity, "wire_exposure");
+    assert!(matrix.message.height > 1 && matrix.message.width == 40);
 
     let published = within(toolpaths.recv()).await.expect("toolpath topic");
     assert_eq!(published.message.job_id, "wing-1");

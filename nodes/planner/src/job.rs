@@ -617,7 +617,7 @@ pub fn plan(
     job: &HotwireJob,
     progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
 ) -> Result<HotwirePlan, JobError> {
-    plan_observed(job, |_| {}, progress)
+    plan_observed(job, &LiveOptions::default(), |_| {}, progress)
 }
 
 /// What [`plan_section`] needs besides the foil.
@@ -625,6 +625,8 @@ struct SectionJob<'a> {
     job: &'a HotwireJob,
     name: &'a str,
     offset_mm: f64,
+    /// Frame id of its heat maps.
+    frame_id: &'static str,
     /// Iterations already run by earlier sections, and the total over all sections.
     iterations_before: usize,
     iterations_total: usize,
@@ -636,7 +638,7 @@ fn plan_section(
     s: &SectionJob<'_>,
     loaded: &Airfoil,
     chord_mm: f64,
-    on_baseline: impl FnOnce(HeatMap),
+    live: &mut Live<'_, impl FnMut(LiveMaps)>,
     progress: &mut impl FnMut(&JobProgress) -> ControlFlow<()>,
 ) -> Result<(SectionPlan, usize), JobError> {
     let job = s.job;
@@ -661,17 +663,16 @@ fn plan_section(
     let problem = Problem::new(&foil, surface_points, baseline, objective).map_err(wrap)?;
     let k = problem.trajectory().control_points();
     let baseline_exposure = problem.exposure(&vec![0.0; k]).map_err(wrap)?;
-    on_baseline(profile_map(
-        objective.model,
-        problem.cse(),
-        &baseline_exposure,
-    ));
+    live.show(&problem, &vec![0.0; k], 0, s.frame_id);
     let config = PsoConfig {
         seed: job.seed,
         ..job.pso
     };
     let result = pso::optimise(&problem, &config, |p| {
         let done = s.iterations_before + p.iteration;
+        if p.improved && live.due() {
+            live.show(&problem, p.best_controls, done, s.frame_id);
+        }
         let elapsed = s.started.elapsed().as_secs_f64();
         let eta_s = elapsed / done.max(1) as f64 * s.iterations_total.saturating_sub(done) as f64;
         progress(&JobProgress {
@@ -718,9 +719,10 @@ fn perimeter_mm(foil: &Airfoil) -> f64 {
         .sum()
 }
 
-/// [`plan`], also handing `on_baseline` the root baseline's exposure profile (as
-/// [`HotwirePlan::baseline_heat_map`] would give it) before the swarm starts, so a caller can
-/// show it while the optimiser runs.
+/// [`plan`], also handing `on_maps` the exposure profile and the wire × panel matrix of the
+/// baseline before each section's swarm starts, and of the best path so far whenever it
+/// improved and at least [`LiveOptions::period`] has passed, so a caller can show the
+/// optimisation as it runs.
 ///
 /// On a tapered panel both sections are optimised (root first, then tip, each with the full
 /// iteration count). The faster face is cut at [`HotwireJob::feed_mm_s`] with the kerf-model
@@ -732,9 +734,15 @@ fn perimeter_mm(foil: &Airfoil) -> f64 {
 /// As [`plan`].
 pub fn plan_observed(
     job: &HotwireJob,
-    on_baseline: impl FnOnce(HeatMap),
+    options: &LiveOptions,
+    on_maps: impl FnMut(LiveMaps),
     mut progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
 ) -> Result<HotwirePlan, JobError> {
+    let mut live = Live {
+        options,
+        last: None,
+        sink: on_maps,
+    };
     validate(job)?;
     let hw = job
         .machine
@@ -777,29 +785,30 @@ pub fn plan_observed(
     let sections = if tip.is_some() { 2 } else { 1 };
     let started = Instant::now();
     let root_name = job.root_airfoil.to_string();
-    let section_job = |name, offset_mm, before| SectionJob {
+    let section_job = |name, offset_mm, frame_id, before| SectionJob {
         job,
         name,
         offset_mm,
+        frame_id,
         iterations_before: before,
         iterations_total: job.pso.iterations * sections,
         started,
     };
     let (mut root, mut iterations) = plan_section(
-        &section_job(&root_name, root_offset, 0),
+        &section_job(&root_name, root_offset, SECTION_FRAME_ID, 0),
         &root_loaded,
         job.chord_mm,
-        on_baseline,
+        &mut live,
         &mut progress,
     )?;
     let tip_plan = match &tip {
         Some((t, loaded)) => {
             let name = t.airfoil.to_string();
             let (plan, n) = plan_section(
-                &section_job(&name, tip_offset, iterations),
+                &section_job(&name, tip_offset, TIP_FRAME_ID, iterations),
                 loaded,
                 t.chord_mm,
-                |_| {},
+                &mut live,
                 &mut progress,
             )?;
             iterations += n;
@@ -1073,8 +1082,76 @@ fn surface_points(foil: &Airfoil, panels: usize) -> Result<usize, JobError> {
 /// at z = 0, UV at z = tower separation).
 pub const FRAME_ID: &str = "hotwire_machine";
 
-/// Frame id of the planner's exposure heat maps: the root section (LE at the origin).
+/// Frame id of the planner's root-section exposure heat maps (LE at the origin).
 pub const SECTION_FRAME_ID: &str = "hotwire_root";
+
+/// Frame id of the tip-section exposure heat maps of a tapered panel.
+pub const TIP_FRAME_ID: &str = "hotwire_tip";
+
+/// How often [`plan_observed`] hands out the current best's heat maps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LiveOptions {
+    /// Least time between two updates (default 1 s); `None`: only the baselines.
+    pub period: Option<std::time::Duration>,
+}
+
+impl Default for LiveOptions {
+    fn default() -> Self {
+        Self {
+            period: Some(std::time::Duration::from_secs(1)),
+        }
+    }
+}
+
+/// The current best path's exposure while planning ([`plan_observed`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveMaps {
+    /// Iterations done when it was computed (0: the baseline).
+    pub iteration: usize,
+    /// 1 × N exposure profile (`exposure_profile`).
+    pub profile: HeatMap,
+    /// M × N wire × panel contributions (`wire_exposure`).
+    pub matrix: HeatMap,
+}
+
+/// Rate-limited producer of [`LiveMaps`].
+struct Live<'a, F> {
+    options: &'a LiveOptions,
+    last: Option<Instant>,
+    sink: F,
+}
+
+impl<F: FnMut(LiveMaps)> Live<'_, F> {
+    fn due(&self) -> bool {
+        match (self.options.period, self.last) {
+            (None, _) => false,
+            (Some(_), None) => true,
+            (Some(p), Some(t)) => t.elapsed() >= p,
+        }
+    }
+
+    /// Computes and hands out the maps of `controls` (skipped if the path is degenerate).
+    fn show(&mut self, problem: &Problem, controls: &[f64], iteration: usize, frame: &str) {
+        let path = problem.path(controls);
+        let model = problem.objective().model;
+        let (Ok(exposure), Ok((rows, cols, values))) = (
+            model.exposure(problem.surface(), &path),
+            model.exposure_matrix(problem.surface(), &path),
+        ) else {
+            return;
+        };
+        let mut profile = profile_map(model, problem.cse(), &exposure);
+        let mut matrix = heat_map(model, problem.cse(), "wire_exposure", cols, rows, values);
+        profile.header.frame_id = frame.into();
+        matrix.header.frame_id = frame.into();
+        self.last = Some(Instant::now());
+        (self.sink)(LiveMaps {
+            iteration,
+            profile,
+            matrix,
+        });
+    }
+}
 
 impl HotwirePlan {
     /// True if the root path (and the tip path, on a tapered panel) keeps `min_clearance_mm`
@@ -1480,6 +1557,46 @@ mod tests {
         let p = plan(&straight, |_| ControlFlow::Continue(())).unwrap();
         assert!(p.tip.is_none());
         assert_eq!(p.cut.xy, p.cut.uv);
+    }
+
+    #[test]
+    fn live_maps_show_the_baseline_then_each_better_path() {
+        let mut seen: Vec<LiveMaps> = Vec::new();
+        let options = LiveOptions {
+            period: Some(std::time::Duration::ZERO),
+        };
+        let p = plan_observed(
+            &small(3),
+            &options,
+            |m| seen.push(m),
+            |_| ControlFlow::Continue(()),
+        )
+        .unwrap();
+        assert!(seen.len() >= 2, "{}", seen.len());
+        assert_eq!(seen[0].iteration, 0);
+        assert_eq!(seen[0].profile.data, p.baseline_heat_map().data);
+        assert!(seen.windows(2).all(|w| w[1].iteration > w[0].iteration));
+        let last = seen.last().unwrap();
+        assert_eq!(last.profile.width, 40);
+        assert_eq!(
+            last.matrix.data.len(),
+            (last.matrix.width * last.matrix.height) as usize
+        );
+        // The last improvement is the optimised path.
+        let final_map = p.exposure_heat_map();
+        assert!(last
+            .profile
+            .data
+            .iter()
+            .zip(&final_map.data)
+            .all(|(a, b)| (a - b).abs() <= 1e-5 * b.abs().max(1.0)));
+        let none = plan_observed(
+            &small(3),
+            &LiveOptions { period: None },
+            |m| assert_eq!(m.iteration, 0, "only the baseline"),
+            |_| ControlFlow::Continue(()),
+        );
+        assert!(none.is_ok());
     }
 
     #[test]

@@ -1,12 +1,11 @@
 //! The `planner` node: serves the `plan_hotwire` action (`cell_msgs/action/PlanHotwire`).
 //!
-//! Per goal: validate (chord > 0, airfoil resolvable; otherwise the goal is rejected), accept,
-//! run [`crate::job::plan_observed`] on a blocking thread, send feedback every
-//! `feedback_every` iterations, republish the latest exposure profile on `exposure` every
-//! `exposure_period_s` (the baseline's while the swarm runs: the optimiser does not expose its
-//! intermediate best), then publish the `Toolpath` on `toolpath`, the final profile on
-//! `exposure` and the wire × panel matrix on `exposure_matrix`, log to Rerun and send the
-//! result. A failed job ends its goal as aborted with the error; the node keeps serving.
+//! Per goal: validate (chord > 0, airfoil and machine resolvable; otherwise the goal is
+//! rejected), accept, run [`crate::job::plan_observed`] on a blocking thread, send feedback
+//! every `feedback_every` iterations (and log the loss curve to Rerun), publish the exposure
+//! profile on `exposure` and the wire × panel matrix on `exposure_matrix` for each baseline and
+//! then for the current best at most every `exposure_period_s`, then publish the `Toolpath` on
+//! `toolpath` and the final maps, log to Rerun and send the result. A failed job ends its goal as aborted with the error; the node keeps serving.
 //! Goals are planned one at a time, in arrival order.
 //!
 //! A goal naming a tip (airfoil, chord, twist or sweep) plans a tapered panel on a 4-axis
@@ -28,7 +27,9 @@ use serde::{Deserialize, Serialize};
 
 use cell_profiles::MachineProfile;
 
-use crate::job::{self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress, TipSection};
+use crate::job::{
+    self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress, LiveMaps, LiveOptions, TipSection,
+};
 use crate::pso::PsoConfig;
 use crate::wing::Placement;
 
@@ -176,7 +177,7 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
 
 /// What the planning thread reports to the node.
 enum Update {
-    Baseline(HeatMap),
+    Maps(Box<LiveMaps>),
     Progress(JobProgress),
 }
 
@@ -237,6 +238,33 @@ fn log_to_rerun(node: &CellNode, plan: &HotwirePlan, toolpath: &Toolpath, profil
             "{} loss {:.4e} -> {:.4e}",
             toolpath.job_id, plan.baseline_loss, plan.final_loss
         ),
+    );
+}
+
+/// Logs one point of the loss curve on the `iteration` timeline.
+fn log_loss(node: &CellNode, iteration: usize, loss: f64) {
+    if let Some(rec) = node.rerun().stream() {
+        rec.set_time_sequence("iteration", iteration as i64);
+        if let Err(e) = rec.log("/hotwire/loss", &rerun::Scalars::single(loss)) {
+            tracing::warn!("rerun: {e}");
+        }
+        rec.disable_timeline("iteration");
+    }
+}
+
+/// Logs the current best's exposure profile and matrix while planning.
+fn log_live(node: &CellNode, maps: &LiveMaps) {
+    let sink = node.rerun();
+    sink.set_time(&maps.profile.header.stamp, 0);
+    let section = if maps.profile.header.frame_id == job::TIP_FRAME_ID {
+        "tip"
+    } else {
+        "root"
+    };
+    sink.log_heat_map(&format!("/hotwire/live/{section}/exposure"), &maps.profile);
+    sink.log_heat_map(
+        &format!("/hotwire/live/{section}/exposure_matrix"),
+        &maps.matrix,
     );
 }
 
@@ -323,13 +351,18 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
         let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
         let stop = Arc::new(AtomicBool::new(false));
         let every = p.feedback_every.max(1);
+        let live = LiveOptions {
+            period: (p.exposure_period_s > 0.0)
+                .then(|| Duration::from_secs_f64(p.exposure_period_s)),
+        };
         let task = {
             let (job, stop, tx) = (job.clone(), stop.clone(), tx);
             tokio::task::spawn_blocking(move || {
                 job::plan_observed(
                     &job,
-                    |h| {
-                        let _ = tx.send(Update::Baseline(h));
+                    &live,
+                    |maps| {
+                        let _ = tx.send(Update::Maps(Box::new(maps)));
                     },
                     |pr| {
                         if pr.iteration % every == 0 || pr.iteration == pr.total {
@@ -344,22 +377,17 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                 )
             })
         };
-        let mut latest: Option<HeatMap> = None;
         let mut cancelled = false;
-        let period = Duration::from_secs_f64(if p.exposure_period_s > 0.0 {
-            p.exposure_period_s
-        } else {
-            1e6
-        });
-        let mut ticker = tokio::time::interval(period);
         loop {
             tokio::select! {
                 update = rx.recv() => match update {
-                    Some(Update::Baseline(h)) => {
-                        exposure.publish(h.clone()).await?;
-                        latest = Some(h);
+                    Some(Update::Maps(maps)) => {
+                        log_live(&node, &maps);
+                        exposure.publish(maps.profile).await?;
+                        matrix.publish(maps.matrix).await?;
                     }
                     Some(Update::Progress(pr)) => {
+                        log_loss(&node, pr.iteration, pr.best_loss);
                         let feedback = PlanHotwireFeedback {
                             iteration: pr.iteration as u32,
                             total_iterations: pr.total as u32,
@@ -372,11 +400,6 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                     }
                     None => break,
                 },
-                _ = ticker.tick() => {
-                    if let Some(h) = &latest {
-                        exposure.publish(h.clone()).await?;
-                    }
-                }
                 c = server.receive_cancel_request() => {
                     let Ok(c) = c else { continue };
                     let goal_id = executing.goal_id();

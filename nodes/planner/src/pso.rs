@@ -128,13 +128,17 @@ impl Default for PsoConfig {
 
 /// Progress reported after every iteration.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Progress {
+pub struct Progress<'a> {
     /// Iterations done (1-based).
     pub iteration: usize,
     /// Iterations configured.
     pub iterations: usize,
     /// Best loss so far.
     pub best_loss: f64,
+    /// The controls of the best loss so far (for showing the current best path).
+    pub best_controls: &'a [f64],
+    /// True if this iteration improved the best.
+    pub improved: bool,
 }
 
 /// The optimiser's result.
@@ -240,6 +244,11 @@ impl Problem {
     /// The resolved CSE target.
     pub fn cse(&self) -> f64 {
         self.cse
+    }
+
+    /// The objective settings.
+    pub fn objective(&self) -> &Objective {
+        &self.objective
     }
 
     /// The surface panels.
@@ -427,6 +436,7 @@ pub fn optimise(
             .zip(scratches.par_iter_mut())
             .zip(losses.par_iter_mut())
             .for_each(|((xp, scratch), loss)| *loss = problem.loss(xp, scratch));
+        let mut improved = false;
         for p in 0..config.particles {
             let l = losses[p];
             if l < p_loss[p] {
@@ -434,6 +444,7 @@ pub fn optimise(
                 p_best[p].clone_from(&x[p]);
                 if l < g_loss {
                     g_loss = l;
+                    improved = true;
                     g_best.clone_from(&x[p]);
                     history.push((it, g_loss));
                 }
@@ -444,6 +455,8 @@ pub fn optimise(
             iteration: it,
             iterations: config.iterations,
             best_loss: g_loss,
+            best_controls: &g_best,
+            improved,
         };
         if progress(report).is_break() {
             cancelled = true;
