@@ -1,0 +1,439 @@
+//! The fast exposure path (module docs of [`super`]): seed 000 eq. 1–5 in closed form per wire
+//! segment, as the reference, but f32, branch-free and vectorised, with work skipped where it
+//! provably contributes nothing.
+//!
+//! Per evaluation site (panel midpoint):
+//! 1. the causal cut point ([`cut_point`]): exact f64, the same answer as the reference's scan,
+//!    but only over the window (binary search on the arc length) and pruned with the wire's
+//!    block/group bounding boxes;
+//! 2. the segments before the cut (all of them with [`Causal::Off`]), skipping blocks whose
+//!    bounding box lies wholly on the inner side of the site's tangent line (χ = 0, eq. 3),
+//!    through the f32 lane kernel ([`run_sum`]);
+//! 3. the cut segment itself in f64 through the reference's own segment formula.
+//!
+//! Written by hand rather than with a SIMD crate's math functions: the kernel is plain f32
+//! arithmetic on fixed-length lane arrays that LLVM vectorises for whichever instruction set
+//! `multiversion` compiled the clone for; `ln` and `atan2` are small polynomial approximations
+//! here ([`ln`], [`atan2_upper`]) because the standard library's are scalar calls that stop the
+//! vectoriser. Clones for CPUs with FMA use fused multiply-adds (`FMA` = true: half the
+//! latency in the polynomials), the others plain multiply and add (`mul_add` would be a slow
+//! library call there), so results are bit-identical run to run on one machine, and may
+//! differ in the last bits between machines with and without FMA.
+
+use multiversion::multiversion;
+use multiversion::target::selected_target;
+
+use super::{Causal, DistanceLaw, ExposureModel, Panels, Site, WireSegments, CAUSAL_WINDOW};
+
+/// Wire segments per bounding-box block.
+pub(super) const BLOCK: usize = 8;
+/// Blocks per bounding-box group.
+pub(super) const GROUP: usize = 8;
+/// f32 lanes of the summation (fixed, whatever the vector width, so that every clone adds in
+/// the same order).
+pub(super) const LANES: usize = 16;
+
+/// A site's constants in f32.
+#[derive(Debug, Clone, Copy)]
+struct Site32 {
+    x: f32,
+    y: f32,
+    tx: f32,
+    ty: f32,
+    dmin: f32,
+}
+
+/// Fast [`ExposureModel::exposure_into`]: `model` has a fast path, inputs are checked.
+#[multiversion(targets(
+    "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma",
+    "x86_64+sse4.2",
+    "aarch64+neon"
+))]
+pub(super) fn exposure(
+    model: &ExposureModel,
+    surface: &Panels,
+    wire: &WireSegments,
+    out: &mut [f64],
+) {
+    if selected_target!().supports_feature_str("fma") {
+        exposure_with::<true>(model, surface, wire, out)
+    } else {
+        exposure_with::<false>(model, surface, wire, out)
+    }
+}
+
+#[inline(always)]
+fn exposure_with<const FMA: bool>(
+    model: &ExposureModel,
+    surface: &Panels,
+    wire: &WireSegments,
+    out: &mut [f64],
+) {
+    let [sx, sy, tx, ty] = &surface.f32;
+    let dmin = model.min_distance_mm as f32;
+    for (i, e) in out.iter_mut().enumerate() {
+        let s32 = Site32 {
+            x: sx[i],
+            y: sy[i],
+            tx: tx[i],
+            ty: ty[i],
+            dmin,
+        };
+        *e = site_value::<FMA>(model, wire, &surface.site(i), &s32);
+    }
+}
+
+/// Fast [`ExposureModel::exposure_at`].
+#[multiversion(targets(
+    "x86_64+avx512f+avx512bw+avx512cd+avx512dq+avx512vl+avx2+fma",
+    "x86_64+avx2+fma",
+    "x86_64+sse4.2",
+    "aarch64+neon"
+))]
+pub(super) fn exposure_at(model: &ExposureModel, wire: &WireSegments, site: &Site) -> f64 {
+    // The same f64 → f32 conversions as `Panels::from_points`, so a panel's own midpoint gives
+    // its value bit for bit.
+    let s32 = Site32 {
+        x: site.x as f32,
+        y: site.y as f32,
+        tx: site.tx as f32,
+        ty: site.ty as f32,
+        dmin: model.min_distance_mm as f32,
+    };
+    if selected_target!().supports_feature_str("fma") {
+        site_value::<true>(model, wire, site, &s32)
+    } else {
+        site_value::<false>(model, wire, site, &s32)
+    }
+}
+
+/// Exposure of one site (steps 1–3 of the module docs).
+#[inline(always)]
+fn site_value<const FMA: bool>(
+    model: &ExposureModel,
+    w: &WireSegments,
+    site: &Site,
+    s32: &Site32,
+) -> f64 {
+    let m = w.len();
+    let (end, cut) = match model.causal {
+        Causal::CutPoint => {
+            let (cut_s, cut_j) = cut_point(w, site.x, site.y, site.u);
+            (cut_j, Some((cut_s, cut_j)))
+        }
+        _ => (m, None),
+    };
+    let author = model.law == DistanceLaw::AuthorCode;
+    let mut total = 0.0f64;
+    // Runs of blocks not wholly on the inner side of the tangent line. (No closure here: a
+    // closure would not inherit the clone's target features.)
+    let nblocks = end.div_ceil(BLOCK);
+    let mut run: Option<usize> = None;
+    for g in 0..nblocks.div_ceil(GROUP) {
+        if inner_side(&w.groups[g], site) {
+            total += flush::<FMA>(w, &mut run, g * GROUP * BLOCK, end, s32, author);
+            continue;
+        }
+        for b in g * GROUP..((g + 1) * GROUP).min(nblocks) {
+            if inner_side(&w.blocks[b], site) {
+                total += flush::<FMA>(w, &mut run, b * BLOCK, end, s32, author);
+            } else if run.is_none() {
+                run = Some(b * BLOCK);
+            }
+        }
+    }
+    total += flush::<FMA>(w, &mut run, end, end, s32, author);
+    if let Some((cut_s, cut_j)) = cut {
+        total += model.segment_value(w, site, cut_j, cut_s, cut_j);
+    }
+    total
+}
+
+/// Ends the open run (if any) at `stop` (≤ `end`) and returns its sum.
+#[inline(always)]
+fn flush<const FMA: bool>(
+    w: &WireSegments,
+    run: &mut Option<usize>,
+    stop: usize,
+    end: usize,
+    s32: &Site32,
+    author: bool,
+) -> f64 {
+    match run.take() {
+        Some(start) if stop.min(end) > start => {
+            f64::from(run_sum::<FMA>(w, start, stop.min(end), s32, author))
+        }
+        _ => 0.0,
+    }
+}
+
+/// True when the box lies wholly where C = t × (p − s) > 0 (seed 000 eq. 2–3: χ = 0), so no
+/// segment inside it heats the site. C is linear, so its minimum over the box is at a corner.
+#[inline(always)]
+fn inner_side(bb: &[f64; 4], s: &Site) -> bool {
+    let y = if s.tx >= 0.0 { bb[1] } else { bb[3] };
+    let x = if s.ty >= 0.0 { bb[2] } else { bb[0] };
+    s.tx * (y - s.y) - s.ty * (x - s.x) > 0.0
+}
+
+/// Σ over segments `j0..j1` of their f32 contributions to the site, ignoring the causal cut
+/// (the caller stops before the cut segment). Works in blocks of [`LANES`] segments, each a
+/// fixed-length loop LLVM turns into whole vectors (no scalar remainder): the f32 arrays are
+/// padded with [`LANES`] zero-length segments, and lanes past `j1` get length 0, which makes
+/// them contribute 0.
+#[inline(always)]
+fn run_sum<const FMA: bool>(
+    w: &WireSegments,
+    j0: usize,
+    j1: usize,
+    s: &Site32,
+    author: bool,
+) -> f32 {
+    let [px, py, wx, wy, len, wt] = &w.f32;
+    let mut acc = [0.0f32; LANES];
+    let mut j = j0;
+    while j < j1 {
+        let live = j1 - j;
+        let lanes = |v: &[f32], j: usize| -> [f32; LANES] { v[j..j + LANES].try_into().unwrap() };
+        let (ax, ay, bx, by) = (
+            lanes(px, j),
+            lanes(py, j),
+            lanes(px, j + 1),
+            lanes(py, j + 1),
+        );
+        let (wx, wy, wt) = (lanes(wx, j), lanes(wy, j), lanes(wt, j));
+        let mut l = lanes(len, j);
+        for (k, l) in l.iter_mut().enumerate() {
+            if k >= live {
+                *l = 0.0;
+            }
+        }
+        if author {
+            for k in 0..LANES {
+                acc[k] +=
+                    pair::<true, FMA>(ax[k], ay[k], bx[k], by[k], wx[k], wy[k], l[k], wt[k], s);
+            }
+        } else {
+            for k in 0..LANES {
+                acc[k] +=
+                    pair::<false, FMA>(ax[k], ay[k], bx[k], by[k], wx[k], wy[k], l[k], wt[k], s);
+            }
+        }
+        j += LANES;
+    }
+    // Pairwise, fixed order.
+    let mut width = LANES;
+    while width > 1 {
+        width /= 2;
+        for k in 0..width {
+            acc[k] += acc[k + width];
+        }
+    }
+    acc[0]
+}
+
+/// One wire segment's contribution to the site without the causal cut (seed 000 eq. 1–5 in
+/// closed form, module docs of [`super`]), f32, branch-free. The segment runs from a to b with
+/// unit direction w and length l (0 for padding and masked lanes): visibility clips the segment to
+/// σ ∈ [lo, hi] where C(σ) ≤ 0 (eq. 2–3); P = |t · w| (eq. 4, unit tangents) times the
+/// segment weight; then ∫ dσ/‖R‖ = ln(g(x₁)/g(x₀)) (`AUTHOR` = false, eq. 5 as printed) or
+/// ∫ dσ/‖R‖² = atan2(d(x₁ − x₀), d² + x₀x₁)/d (`AUTHOR`, the author's code).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn pair<const AUTHOR: bool, const FMA: bool>(
+    ax: f32,
+    ay: f32,
+    bx: f32,
+    by: f32,
+    wx: f32,
+    wy: f32,
+    l: f32,
+    wt: f32,
+    s: &Site32,
+) -> f32 {
+    let (rx, ry) = (ax - s.x, ay - s.y);
+    // C at the segment's start a and end b (eq. 2), linear in between; from the points
+    // themselves, so a segment that starts or ends exactly on the tangent line (a wire vertex
+    // at the site, say) clips exactly there.
+    let ca = s.tx * ry - s.ty * rx;
+    let cb = s.tx * (by - s.y) - s.ty * (bx - s.x);
+    let den = ca - cb;
+    let root = l * (ca / if den == 0.0 { 1.0 } else { den });
+    let lo = if ca > 0.0 { root } else { 0.0 };
+    let hi = if cb > 0.0 { root } else { l };
+    // Both ends inside: lo = hi = root. Zero length: lo = hi.
+    let visible = hi > lo;
+    let weight = (s.tx * wx + s.ty * wy).abs() * wt;
+    let x0 = rx * wx + ry * wy;
+    let d = (rx * wy - ry * wx).abs().max(s.dmin);
+    let d2 = d * d;
+    let (xl, xh) = (x0 + lo, x0 + hi);
+    let v = if AUTHOR {
+        atan2_upper::<FMA>(d * (hi - lo), fma::<FMA>(xl, xh, d2)) / d
+    } else {
+        // g(x) = x + √(x² + d²) = n/q, as d²/(√(x² + d²) − x) for x < 0 (no cancellation).
+        let (rl, rh) = (fma::<FMA>(xl, xl, d2).sqrt(), fma::<FMA>(xh, xh, d2).sqrt());
+        let (nl, ql) = if xl >= 0.0 {
+            (xl + rl, 1.0)
+        } else {
+            (d2, rl - xl)
+        };
+        let (nh, qh) = if xh >= 0.0 {
+            (xh + rh, 1.0)
+        } else {
+            (d2, rh - xh)
+        };
+        ln::<FMA>(((nh * ql) / (qh * nl)).max(1.0))
+    };
+    if visible {
+        weight * v
+    } else {
+        0.0
+    }
+}
+
+/// Natural logarithm for finite x ≥ 1 (the ratio g(x₁)/g(x₀) ≥ 1), branch-free: x = 2ᵉ·m with
+/// m ∈ [√½, √2), ln x = e·ln 2 + ln m, ln m by the Cephes `logf` polynomial in m − 1.
+/// Max relative error 2e-7 over [1, 1e30] (test `ln_and_atan2_accuracy`).
+#[inline(always)]
+pub(super) fn ln<const FMA: bool>(x: f32) -> f32 {
+    let bits = x.to_bits();
+    // Exponent for m ∈ [0.5, 1), then shift m into [√½, √2).
+    let e = ((bits >> 23) & 0xff) as i32 - 126;
+    let m = f32::from_bits((bits & 0x007f_ffff) | 0x3f00_0000);
+    let small = m < std::f32::consts::FRAC_1_SQRT_2;
+    let e = (if small { e - 1 } else { e }) as f32;
+    let f = if small { m + m - 1.0 } else { m - 1.0 };
+    let z = f * f;
+    let mut p = 7.037_683_6e-2f32;
+    for c in [
+        -1.151_461e-1,
+        1.167_699_9e-1,
+        -1.242_014_1e-1,
+        1.424_932_3e-1,
+        -1.666_805_8e-1,
+        2.000_071_4e-1,
+        -2.499_999_4e-1,
+        3.333_333e-1,
+    ] {
+        p = fma::<FMA>(p, f, c);
+    }
+    let y = fma::<FMA>(p * f, z, fma::<FMA>(-2.121_944_4e-4, e, -0.5 * z));
+    fma::<FMA>(0.693_359_4, e, f + y)
+}
+
+/// atan2(y, x) for y ≥ 0 (the angle lies in [0, π]), branch-free: atan of
+/// min(|x|, y)/max(|x|, y) ∈ [0, 1] by the SLEEF `atanf` polynomial, then reflected.
+/// Max absolute error 3e-7 rad (test `ln_and_atan2_accuracy`). Returns 0 for y = x = 0.
+#[inline(always)]
+pub(super) fn atan2_upper<const FMA: bool>(y: f32, x: f32) -> f32 {
+    let ax = x.abs();
+    let (lo, hi) = (ax.min(y), ax.max(y));
+    let a = lo / if hi > 0.0 { hi } else { 1.0 };
+    let t = a * a;
+    let mut u = 2.823_639e-3f32;
+    for c in [
+        -1.595_690_3e-2,
+        4.250_499e-2,
+        -7.489_009e-2,
+        1.063_479_3e-1,
+        -1.420_273_6e-1,
+        1.999_269_6e-1,
+        -3.333_310_2e-1,
+    ] {
+        u = fma::<FMA>(u, t, c);
+    }
+    let r = fma::<FMA>(a, t * u, a);
+    let r = if y > ax {
+        std::f32::consts::FRAC_PI_2 - r
+    } else {
+        r
+    };
+    if x < 0.0 {
+        std::f32::consts::PI - r
+    } else {
+        r
+    }
+}
+
+/// a·b + c, fused (one rounding) when `FMA`.
+#[inline(always)]
+fn fma<const FMA: bool>(a: f32, b: f32, c: f32) -> f32 {
+    if FMA {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
+
+/// The causal cut point (as the reference `super::cut_point`, bit for bit): the nearest wire
+/// point to (sx, sy) within ±[`CAUSAL_WINDOW`] of normalised wire arc length around `u`, as its
+/// arc position in mm and segment; ties keep the earlier segment. Finds the window's segments
+/// by binary search, starts from the block at arc position u, then visits only groups and
+/// blocks whose bounding box could hold a nearer point.
+pub(super) fn cut_point(w: &WireSegments, sx: f64, sy: f64, u: f64) -> (f64, usize) {
+    let lo = (u - CAUSAL_WINDOW).max(0.0) * w.total;
+    let hi = (u + CAUSAL_WINDOW).min(1.0) * w.total;
+    let m = w.len();
+    // A superset of the segments the reference accepts (p ≤ q below): slack for rounding.
+    let slack = 1e-9 * w.total;
+    let j0 = partition(m, |j| w.s0[j] + w.len[j] < lo - slack);
+    let j1 = partition(m, |j| w.s0[j] <= hi + slack);
+    let mut best = (f64::INFINITY, lo, 0usize);
+    if j0 >= j1 {
+        return (lo, 0);
+    }
+    let scan = |b: usize, best: &mut (f64, f64, usize)| {
+        for j in (b * BLOCK).max(j0)..((b + 1) * BLOCK).min(j1) {
+            let (s0, l) = (w.s0[j], w.len[j]);
+            let (p, q) = ((lo - s0).max(0.0), (hi - s0).min(l));
+            if p > q {
+                continue;
+            }
+            let (rx, ry) = (w.ax[j] - sx, w.ay[j] - sy);
+            let x0 = rx * w.wx[j] + ry * w.wy[j];
+            let sigma = (-x0).clamp(p, q);
+            let (dx, dy) = (rx + sigma * w.wx[j], ry + sigma * w.wy[j]);
+            let d2 = dx * dx + dy * dy;
+            if d2 < best.0 || (d2 == best.0 && j < best.2) {
+                *best = (d2, s0 + sigma, j);
+            }
+        }
+    };
+    let box_d2 = |bb: &[f64; 4]| {
+        let dx = (bb[0] - sx).max(sx - bb[2]).max(0.0);
+        let dy = (bb[1] - sy).max(sy - bb[3]).max(0.0);
+        dx * dx + dy * dy
+    };
+    let guess = (partition(m, |j| w.s0[j] <= u * w.total).saturating_sub(1)).clamp(j0, j1 - 1);
+    let first = guess / BLOCK;
+    scan(first, &mut best);
+    let (b0, b1) = (j0 / BLOCK, (j1 - 1) / BLOCK + 1);
+    for g in b0 / GROUP..(b1 - 1) / GROUP + 1 {
+        if box_d2(&w.groups[g]) > best.0 {
+            continue;
+        }
+        for b in (g * GROUP).max(b0)..((g + 1) * GROUP).min(b1) {
+            if b != first && box_d2(&w.blocks[b]) <= best.0 {
+                scan(b, &mut best);
+            }
+        }
+    }
+    (best.1, best.2)
+}
+
+/// The first index in 0..n where `pred` turns false (`pred` true on a prefix).
+#[inline]
+fn partition(n: usize, pred: impl Fn(usize) -> bool) -> usize {
+    let (mut lo, mut hi) = (0, n);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if pred(mid) {
+            lo = mid + 1;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
