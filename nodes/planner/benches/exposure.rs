@@ -7,7 +7,8 @@
 //!
 //! `CARGO_TARGET_DIR=/tmp/target-speed cargo bench -p cell_planner --bench exposure`
 //! Options (environment): `EXPOSURE_N=100,400` picks panel counts; `EXPOSURE_PEER=0` skips the
-//! NumPy peer (it needs `python3` with numpy: `pip install numpy`).
+//! NumPy peer (it needs `python3` with numpy: `pip install numpy`); `EXPOSURE_PROFILE=3` only
+//! runs the fast path (paper law) for 3 s per N, for a profiler.
 
 use std::fmt::Write as _;
 use std::process::Command;
@@ -174,6 +175,16 @@ fn main() {
             println!("  NumPy peer skipped (EXPOSURE_PEER=0)");
             None
         };
+        if let Ok(secs) = std::env::var("EXPOSURE_PROFILE") {
+            // Only the fast path, for a profiler: `EXPOSURE_PROFILE=3 perf record …`.
+            let m_ = model(DistanceLaw::Paper);
+            let mut out = vec![0.0; nn];
+            let t = Instant::now();
+            while t.elapsed().as_secs_f64() < secs.parse::<f64>().unwrap_or(3.0) {
+                m_.exposure_into(&surface, &wire, &mut out).unwrap();
+            }
+            continue;
+        }
         for law in [DistanceLaw::Paper, DistanceLaw::AuthorCode] {
             let m_ = model(law);
             let mut fast = vec![0.0; nn];

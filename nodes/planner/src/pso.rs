@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use crate::airfoil::{Airfoil, AirfoilError};
 use crate::exposure::{ExposureError, ExposureModel, Panels, WireSegments};
-use crate::trajectory::{is_feasible, Baseline, Trajectory, TrajectoryError};
+use crate::trajectory::{is_feasible, Baseline, OutlineGrid, Trajectory, TrajectoryError};
 
 /// A rejected optimiser input.
 #[derive(Debug, thiserror::Error)]
@@ -161,7 +161,8 @@ pub struct PsoResult {
 /// A fixed problem: foil, surface panels, parameterised trajectory and objective.
 #[derive(Debug, Clone)]
 pub struct Problem {
-    outline: Vec<Point2<f64>>,
+    /// The foil outline G, bucketed for the per-evaluation feasibility test.
+    grid: OutlineGrid,
     surface: Panels,
     trajectory: Trajectory,
     objective: Objective,
@@ -225,7 +226,7 @@ impl Problem {
         let surface = Panels::from_points(foil.resampled_cosine(surface_panels)?.points())?;
         let trajectory = Trajectory::new(baseline, objective.control_points)?;
         let mut p = Self {
-            outline,
+            grid: OutlineGrid::new(&outline),
             surface,
             trajectory,
             objective,
@@ -268,11 +269,8 @@ impl Problem {
 
     /// True if the path for `controls` satisfies T ∩ G = ∅ with the clearance.
     pub fn is_feasible(&self, controls: &[f64]) -> bool {
-        is_feasible(
-            &self.path(controls),
-            &self.outline,
-            self.objective.min_clearance_mm,
-        )
+        self.grid
+            .is_feasible(&self.path(controls), self.objective.min_clearance_mm)
     }
 
     /// Exposure of every surface panel for `controls`.
@@ -287,17 +285,18 @@ impl Problem {
     }
 
     /// The loss L(c) (module docs); +∞ for an infeasible or degenerate path or non-finite
-    /// controls.
+    /// controls. Allocates nothing once `scratch` is warm; the feasibility test visits only
+    /// the outline near the path ([`OutlineGrid`]) and the exposure takes the model's fast
+    /// path when it has one ([`ExposureModel::exposure_into`]).
     pub fn loss(&self, controls: &[f64], scratch: &mut Scratch) -> f64 {
         if controls.iter().any(|c| !c.is_finite()) {
             return f64::INFINITY;
         }
         self.trajectory.path_into(controls, &mut scratch.path);
-        if !is_feasible(
-            &scratch.path,
-            &self.outline,
-            self.objective.min_clearance_mm,
-        ) || scratch.wire.set(&scratch.path).is_err()
+        if !self
+            .grid
+            .is_feasible(&scratch.path, self.objective.min_clearance_mm)
+            || scratch.wire.set(&scratch.path).is_err()
         {
             return f64::INFINITY;
         }

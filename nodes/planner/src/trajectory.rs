@@ -311,6 +311,205 @@ pub fn is_feasible(path: &[Point2<f64>], outline: &[Point2<f64>], min_clearance_
     c >= limit && c > 0.0
 }
 
+/// The foil outline bucketed in a uniform grid, so that the feasibility test T ∩ G = ∅
+/// (seed 000 §IV.C) of a path costs about O(path) instead of O(path × outline):
+/// [`OutlineGrid::is_feasible`] gives exactly [`is_feasible`]'s answer. Hand-written (about 60
+/// lines) because a general spatial index (e.g. an R-tree) costs more per query than this
+/// needs: a few hundred short path segments per candidate, each touching one to four cells.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutlineGrid {
+    outline: Vec<Point2<f64>>,
+    /// Lower-left corner of cell (0, 0) and the cell size, mm.
+    origin: Point2<f64>,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    /// Cell c holds outline segments `items[start[c]..start[c + 1]]` (segment i runs
+    /// outline[i] → outline[i + 1], the last one closes the polygon).
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl OutlineGrid {
+    /// Buckets the closed polygon `outline` (closing segment implied) in square cells of the
+    /// mean segment length.
+    pub fn new(outline: &[Point2<f64>]) -> Self {
+        let n = outline.len();
+        let (mut lo, mut hi) = (
+            Point2::new(f64::INFINITY, f64::INFINITY),
+            Point2::new(-f64::INFINITY, -f64::INFINITY),
+        );
+        for p in outline {
+            lo = Point2::new(lo.x.min(p.x), lo.y.min(p.y));
+            hi = Point2::new(hi.x.max(p.x), hi.y.max(p.y));
+        }
+        let seg = |i: usize| (outline[i], outline[(i + 1) % n]);
+        let perimeter: f64 = (0..n).map(|i| (seg(i).1 - seg(i).0).norm()).sum();
+        let extent = (hi.x - lo.x).max(hi.y - lo.y);
+        let mut grid = Self {
+            outline: outline.to_vec(),
+            origin: lo,
+            cell: 1.0,
+            nx: 0,
+            ny: 0,
+            start: vec![0],
+            items: Vec::new(),
+        };
+        if n < 2 || !(perimeter.is_finite() && extent.is_finite() && perimeter > 0.0) {
+            return grid; // no cells: `is_feasible` falls back to the plain test.
+        }
+        // Mean segment length, but at most 4096 cells a side.
+        grid.cell = (perimeter / n as f64).max(extent / 4096.0);
+        grid.nx = ((hi.x - lo.x) / grid.cell).floor() as usize + 1;
+        grid.ny = ((hi.y - lo.y) / grid.cell).floor() as usize + 1;
+        let mut count = vec![0u32; grid.nx * grid.ny + 1];
+        let cells_of = |g: &Self, i: usize| {
+            let (c, d) = seg(i);
+            g.cells(c.x.min(d.x), c.y.min(d.y), c.x.max(d.x), c.y.max(d.y))
+        };
+        for i in 0..n {
+            if let Some((x0, y0, x1, y1)) = cells_of(&grid, i) {
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        count[y * grid.nx + x + 1] += 1;
+                    }
+                }
+            }
+        }
+        for c in 1..count.len() {
+            count[c] += count[c - 1];
+        }
+        let mut fill = count.clone();
+        grid.items = vec![0; count[count.len() - 1] as usize];
+        for i in 0..n {
+            if let Some((x0, y0, x1, y1)) = cells_of(&grid, i) {
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        let c = y * grid.nx + x;
+                        grid.items[fill[c] as usize] = i as u32;
+                        fill[c] += 1;
+                    }
+                }
+            }
+        }
+        grid.start = count;
+        grid
+    }
+
+    /// Inclusive cell ranges covering the box, clamped to the grid; `None` if they miss it.
+    fn cells(&self, x0: f64, y0: f64, x1: f64, y1: f64) -> Option<(usize, usize, usize, usize)> {
+        let fx = |x: f64| (x - self.origin.x) / self.cell;
+        let fy = |y: f64| (y - self.origin.y) / self.cell;
+        let (a, b, c, d) = (fx(x0), fy(y0), fx(x1), fy(y1));
+        let (nx, ny) = (self.nx as f64, self.ny as f64);
+        // NaN fails every comparison: treated as missing the grid.
+        if !(c >= 0.0 && d >= 0.0 && a < nx && b < ny) {
+            return None;
+        }
+        // `as usize` truncates, i.e. floors a value ≥ 0 (f64::floor is a libm call on x86-64).
+        let clamp = |v: f64, n: usize| (v.max(0.0) as usize).min(n - 1);
+        Some((
+            clamp(a, self.nx),
+            clamp(b, self.ny),
+            clamp(c, self.nx),
+            clamp(d, self.ny),
+        ))
+    }
+
+    /// Exactly [`is_feasible`]`(path, outline, min_clearance_mm)`, visiting only outline
+    /// segments in the cells near each path segment.
+    pub fn is_feasible(&self, path: &[Point2<f64>], min_clearance_mm: f64) -> bool {
+        let outline = &self.outline;
+        let n = outline.len();
+        if self.nx == 0 {
+            return is_feasible(path, outline, min_clearance_mm);
+        }
+        let limit = min_clearance_mm.max(0.0);
+        let lim = limit.max(f64::MIN_POSITIVE);
+        if path.is_empty() {
+            return true;
+        }
+        if point_in_polygon(path[0], outline) {
+            return false;
+        }
+        // The smallest distance below `lim` found so far (as `clearance_mm` with limit `lim`).
+        let mut best = lim;
+        for s in path.windows(2) {
+            let (a, b) = (s[0], s[1]);
+            let (lo_x, hi_x) = (a.x.min(b.x) - lim, a.x.max(b.x) + lim);
+            let (lo_y, hi_y) = (a.y.min(b.y) - lim, a.y.max(b.y) + lim);
+            let Some((x0, y0, x1, y1)) = self.cells(lo_x, lo_y, hi_x, hi_y) else {
+                continue;
+            };
+            for y in y0..=y1 {
+                let row = y * self.nx;
+                let items =
+                    &self.items[self.start[row + x0] as usize..self.start[row + x1 + 1] as usize];
+                for &i in items {
+                    let i = i as usize;
+                    let (c, d) = (outline[i], outline[(i + 1) % n]);
+                    if c.x.max(d.x) < lo_x
+                        || c.x.min(d.x) > hi_x
+                        || c.y.max(d.y) < lo_y
+                        || c.y.min(d.y) > hi_y
+                    {
+                        continue;
+                    }
+                    // Most candidates are clearly further than `best`: a test without
+                    // square roots or divisions rules them out first.
+                    if !maybe_closer(a, b, c, d, best) {
+                        continue;
+                    }
+                    let dist = segment_distance(a, b, c, d);
+                    if dist < best {
+                        best = dist;
+                        if !(best >= limit && best > 0.0) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        best >= limit && best > 0.0
+    }
+}
+
+/// False only when segments ab and cd certainly do not come closer than `limit` (> 0): they
+/// do not cross, and every endpoint is at least `limit`·(1 + 1e-9) from the other segment
+/// (squared distances, no square root or division). True otherwise, including when rounding
+/// could matter: the caller then computes [`segment_distance`].
+#[inline]
+fn maybe_closer(
+    a: Point2<f64>,
+    b: Point2<f64>,
+    c: Point2<f64>,
+    d: Point2<f64>,
+    limit: f64,
+) -> bool {
+    let l2 = limit * limit * (1.0 + 1e-9);
+    // Is p within √l2 of segment qr?
+    let near = |p: Point2<f64>, q: Point2<f64>, r: Point2<f64>| {
+        let (qr, qp) = (r - q, p - q);
+        let (dot, len2) = (qr.dot(&qp), qr.norm_squared());
+        if dot <= 0.0 {
+            qp.norm_squared() < l2
+        } else if dot >= len2 {
+            (p - r).norm_squared() < l2
+        } else {
+            let cross = qr.perp(&qp);
+            cross * cross < l2 * len2
+        }
+    };
+    let orient = |p: Point2<f64>, q: Point2<f64>, r: Point2<f64>| (q - p).perp(&(r - p));
+    let (d1, d2) = (orient(c, d, a), orient(c, d, b));
+    let (d3, d4) = (orient(a, b, c), orient(a, b, d));
+    (d1 * d2 <= 0.0 && d3 * d4 <= 0.0)
+        || near(a, c, d)
+        || near(b, c, d)
+        || near(c, a, b)
+        || near(d, a, b)
+}
+
 fn point_segment_distance(p: Point2<f64>, a: Point2<f64>, b: Point2<f64>) -> f64 {
     let ab = b - a;
     let l2 = ab.norm_squared();
@@ -424,6 +623,57 @@ mod tests {
             .map(|p| nalgebra::center(p, &Point2::new(100.0, 2.0)))
             .collect();
         assert_eq!(clearance_mm(&inside, f.points(), f64::INFINITY), 0.0);
+    }
+
+    /// The grid test gives the plain test's answer on swarm-like candidates (normal
+    /// displacements, many of them crossing or too close), on several foils and clearances.
+    #[test]
+    fn outline_grid_agrees_with_the_plain_feasibility_test() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let (mut feasible, mut infeasible) = (0, 0);
+        for name in ["s1223", "clarky", "e387", "naca0012"] {
+            let f = foil(name, 200.0);
+            let grid = OutlineGrid::new(f.points());
+            for m in [60, 300] {
+                let t = Trajectory::new(Baseline::fixed_offset(&f, 0.5, m).unwrap(), 32).unwrap();
+                for k in 0..100 {
+                    let spread = [0.05, 0.3, 1.0, 4.0][k % 4];
+                    let c: Vec<f64> = (0..32).map(|_| rng.random_range(-spread..spread)).collect();
+                    let path = t.path(&c);
+                    for clearance in [0.0, 0.1, 0.45, 2.0] {
+                        let plain = is_feasible(&path, f.points(), clearance);
+                        assert_eq!(grid.is_feasible(&path, clearance), plain, "{name} {k}");
+                        if plain {
+                            feasible += 1;
+                        } else {
+                            infeasible += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            feasible > 500 && infeasible > 500,
+            "{feasible} {infeasible}"
+        );
+        // A path entirely inside, one far outside, a degenerate outline.
+        let f = foil("clarky", 200.0);
+        let grid = OutlineGrid::new(f.points());
+        let inside: Vec<_> = f
+            .points()
+            .iter()
+            .map(|p| nalgebra::center(p, &Point2::new(100.0, 2.0)))
+            .collect();
+        assert!(!grid.is_feasible(&inside, 0.1));
+        let far: Vec<_> = f
+            .points()
+            .iter()
+            .map(|p| p + Vector2::new(0.0, 500.0))
+            .collect();
+        assert!(grid.is_feasible(&far, 0.1));
+        let one = OutlineGrid::new(&[Point2::new(0.0, 0.0)]);
+        assert!(one.is_feasible(&far, 0.1));
     }
 
     #[test]

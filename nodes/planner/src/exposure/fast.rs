@@ -3,18 +3,19 @@
 //! provably contributes nothing.
 //!
 //! Per evaluation site (panel midpoint):
-//! 1. the causal cut point ([`cut_point`]): exact f64, the same answer as the reference's scan,
-//!    but only over the window (binary search on the arc length) and pruned with the wire's
-//!    block/group bounding boxes;
+//! 1. the causal cut point ([`cut_point_from`]): exact f64, the same answer as the reference's
+//!    scan, but only over the window (binary search on the arc length), starting from the
+//!    previous panel's cut, and pruned with the wire's block/group bounding boxes;
 //! 2. the segments before the cut (all of them with [`Causal::Off`]), skipping blocks whose
 //!    bounding box lies wholly on the inner side of the site's tangent line (χ = 0, eq. 3),
-//!    through the f32 lane kernel ([`run_sum`]);
+//!    through the f32 lane kernel ([`run_sum`]), which also skips lane groups that are wholly
+//!    inside and leaves out the visibility clip where no lane needs it;
 //! 3. the cut segment itself in f64 through the reference's own segment formula.
 //!
 //! Written by hand rather than with a SIMD crate's math functions: the kernel is plain f32
 //! arithmetic on fixed-length lane arrays that LLVM vectorises for whichever instruction set
 //! `multiversion` compiled the clone for; `ln` and `atan2` are small polynomial approximations
-//! here ([`ln`], [`atan2_upper`]) because the standard library's are scalar calls that stop the
+//! here ([`ln`], [`atan2_over`]) because the standard library's are scalar calls that stop the
 //! vectoriser. Clones for CPUs with FMA use fused multiply-adds (`FMA` = true: half the
 //! latency in the polynomials), the others plain multiply and add (`mul_add` would be a slow
 //! library call there), so results are bit-identical run to run on one machine, and may
@@ -72,6 +73,7 @@ fn exposure_with<const FMA: bool>(
 ) {
     let [sx, sy, tx, ty] = &surface.f32;
     let dmin = model.min_distance_mm as f32;
+    let mut hint = None;
     for (i, e) in out.iter_mut().enumerate() {
         let s32 = Site32 {
             x: sx[i],
@@ -80,7 +82,7 @@ fn exposure_with<const FMA: bool>(
             ty: ty[i],
             dmin,
         };
-        *e = site_value::<FMA>(model, wire, &surface.site(i), &s32);
+        *e = site_value::<FMA>(model, wire, &surface.site(i), &s32, &mut hint);
     }
 }
 
@@ -102,9 +104,9 @@ pub(super) fn exposure_at(model: &ExposureModel, wire: &WireSegments, site: &Sit
         dmin: model.min_distance_mm as f32,
     };
     if selected_target!().supports_feature_str("fma") {
-        site_value::<true>(model, wire, site, &s32)
+        site_value::<true>(model, wire, site, &s32, &mut None)
     } else {
-        site_value::<false>(model, wire, site, &s32)
+        site_value::<false>(model, wire, site, &s32, &mut None)
     }
 }
 
@@ -115,11 +117,13 @@ fn site_value<const FMA: bool>(
     w: &WireSegments,
     site: &Site,
     s32: &Site32,
+    hint: &mut Option<usize>,
 ) -> f64 {
     let m = w.len();
     let (end, cut) = match model.causal {
         Causal::CutPoint => {
-            let (cut_s, cut_j) = cut_point(w, site.x, site.y, site.u);
+            let (cut_s, cut_j) = cut_point_from(w, site.x, site.y, site.u, *hint);
+            *hint = Some(cut_j);
             (cut_j, Some((cut_s, cut_j)))
         }
         _ => (m, None),
@@ -209,16 +213,34 @@ fn run_sum<const FMA: bool>(
                 *l = 0.0;
             }
         }
-        if author {
-            for k in 0..LANES {
-                acc[k] +=
-                    pair::<true, FMA>(ax[k], ay[k], bx[k], by[k], wx[k], wy[k], l[k], wt[k], s);
-            }
-        } else {
-            for k in 0..LANES {
-                acc[k] +=
-                    pair::<false, FMA>(ax[k], ay[k], bx[k], by[k], wx[k], wy[k], l[k], wt[k], s);
-            }
+        // Does any lane cross the tangent line or lie inside it (C > 0 at an end, eq. 2–3)?
+        // Usually not: then the kernel without the visibility clip does.
+        // And are all of them inside (or padding)? Then they contribute nothing.
+        let (mut clipped, mut inner) = (false, true);
+        for k in 0..LANES {
+            let ca = s.tx * (ay[k] - s.y) - s.ty * (ax[k] - s.x);
+            let cb = s.tx * (by[k] - s.y) - s.ty * (bx[k] - s.x);
+            clipped |= (ca > 0.0) | (cb > 0.0);
+            inner &= ((ca > 0.0) & (cb > 0.0)) | (l[k] == 0.0);
+        }
+        if inner {
+            j += LANES;
+            continue;
+        }
+        macro_rules! lanes_of {
+            ($author:literal, $clip:literal) => {
+                for k in 0..LANES {
+                    acc[k] += pair::<$author, $clip, FMA>(
+                        ax[k], ay[k], bx[k], by[k], wx[k], wy[k], l[k], wt[k], s,
+                    );
+                }
+            };
+        }
+        match (author, clipped) {
+            (true, true) => lanes_of!(true, true),
+            (true, false) => lanes_of!(true, false),
+            (false, true) => lanes_of!(false, true),
+            (false, false) => lanes_of!(false, false),
         }
         j += LANES;
     }
@@ -241,7 +263,7 @@ fn run_sum<const FMA: bool>(
 /// ∫ dσ/‖R‖² = atan2(d(x₁ − x₀), d² + x₀x₁)/d (`AUTHOR`, the author's code).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn pair<const AUTHOR: bool, const FMA: bool>(
+fn pair<const AUTHOR: bool, const CLIP: bool, const FMA: bool>(
     ax: f32,
     ay: f32,
     bx: f32,
@@ -256,12 +278,19 @@ fn pair<const AUTHOR: bool, const FMA: bool>(
     // C at the segment's start a and end b (eq. 2), linear in between; from the points
     // themselves, so a segment that starts or ends exactly on the tangent line (a wire vertex
     // at the site, say) clips exactly there.
-    let ca = s.tx * ry - s.ty * rx;
-    let cb = s.tx * (by - s.y) - s.ty * (bx - s.x);
-    let den = ca - cb;
-    let root = l * (ca / if den == 0.0 { 1.0 } else { den });
-    let lo = if ca > 0.0 { root } else { 0.0 };
-    let hi = if cb > 0.0 { root } else { l };
+    // Without `CLIP` the caller knows C ≤ 0 at both ends: all of it is visible.
+    let (lo, hi) = if CLIP {
+        let ca = s.tx * ry - s.ty * rx;
+        let cb = s.tx * (by - s.y) - s.ty * (bx - s.x);
+        let den = ca - cb;
+        let root = l * (ca / if den == 0.0 { 1.0 } else { den });
+        (
+            if ca > 0.0 { root } else { 0.0 },
+            if cb > 0.0 { root } else { l },
+        )
+    } else {
+        (0.0, l)
+    };
     // Both ends inside: lo = hi = root. Zero length: lo = hi.
     let visible = hi > lo;
     let weight = (s.tx * wx + s.ty * wy).abs() * wt;
@@ -270,7 +299,7 @@ fn pair<const AUTHOR: bool, const FMA: bool>(
     let d2 = d * d;
     let (xl, xh) = (x0 + lo, x0 + hi);
     let v = if AUTHOR {
-        atan2_upper::<FMA>(d * (hi - lo), fma::<FMA>(xl, xh, d2)) / d
+        atan2_over::<FMA>(d * (hi - lo), fma::<FMA>(xl, xh, d2), d)
     } else {
         // g(x) = x + √(x² + d²) = n/q, as d²/(√(x² + d²) − x) for x < 0 (no cancellation).
         let (rl, rh) = (fma::<FMA>(xl, xl, d2).sqrt(), fma::<FMA>(xh, xh, d2).sqrt());
@@ -295,7 +324,7 @@ fn pair<const AUTHOR: bool, const FMA: bool>(
 
 /// Natural logarithm for finite x ≥ 1 (the ratio g(x₁)/g(x₀) ≥ 1), branch-free: x = 2ᵉ·m with
 /// m ∈ [√½, √2), ln x = e·ln 2 + ln m, ln m by the Cephes `logf` polynomial in m − 1.
-/// Max relative error 2e-7 over [1, 1e30] (test `ln_and_atan2_accuracy`).
+/// Max relative error 8e-8 over [1, 1e30], with or without FMA (test `ln_and_atan2_accuracy`).
 #[inline(always)]
 pub(super) fn ln<const FMA: bool>(x: f32) -> f32 {
     let bits = x.to_bits();
@@ -323,14 +352,9 @@ pub(super) fn ln<const FMA: bool>(x: f32) -> f32 {
     fma::<FMA>(0.693_359_4, e, f + y)
 }
 
-/// atan2(y, x) for y ≥ 0 (the angle lies in [0, π]), branch-free: atan of
-/// min(|x|, y)/max(|x|, y) ∈ [0, 1] by the SLEEF `atanf` polynomial, then reflected.
-/// Max absolute error 3e-7 rad (test `ln_and_atan2_accuracy`). Returns 0 for y = x = 0.
+/// atan a for a ∈ [0, 1] (SLEEF `atanf` polynomial).
 #[inline(always)]
-pub(super) fn atan2_upper<const FMA: bool>(y: f32, x: f32) -> f32 {
-    let ax = x.abs();
-    let (lo, hi) = (ax.min(y), ax.max(y));
-    let a = lo / if hi > 0.0 { hi } else { 1.0 };
+fn atan_unit<const FMA: bool>(a: f32) -> f32 {
     let t = a * a;
     let mut u = 2.823_639e-3f32;
     for c in [
@@ -344,17 +368,27 @@ pub(super) fn atan2_upper<const FMA: bool>(y: f32, x: f32) -> f32 {
     ] {
         u = fma::<FMA>(u, t, c);
     }
-    let r = fma::<FMA>(a, t * u, a);
+    fma::<FMA>(a, t * u, a)
+}
+
+/// atan2(y, x)/d for y ≥ 0 (the angle lies in [0, π]) and d > 0, branch-free, with a single
+/// division: atan of min(|x|, y)/max(|x|, y) ∈ [0, 1] ([`atan_unit`]), then reflected; with
+/// q = 1/(max(|x|, y)·d), min/max = min·q·d and 1/d = max·q. Max absolute error of the angle
+/// 4.3e-7 rad, max relative error of the result 2.8e-7 (test `ln_and_atan2_accuracy`); 0 for
+/// y = x = 0.
+#[inline(always)]
+pub(super) fn atan2_over<const FMA: bool>(y: f32, x: f32, d: f32) -> f32 {
+    let ax = x.abs();
+    let (lo, hi) = (ax.min(y), ax.max(y));
+    let q = 1.0 / (if hi > 0.0 { hi } else { 1.0 } * d);
+    let r = atan_unit::<FMA>(lo * (q * d));
     let r = if y > ax {
         std::f32::consts::FRAC_PI_2 - r
     } else {
         r
     };
-    if x < 0.0 {
-        std::f32::consts::PI - r
-    } else {
-        r
-    }
+    let r = if x < 0.0 { std::f32::consts::PI - r } else { r };
+    r * (hi * q)
 }
 
 /// a·b + c, fused (one rounding) when `FMA`.
@@ -369,10 +403,24 @@ fn fma<const FMA: bool>(a: f32, b: f32, c: f32) -> f32 {
 
 /// The causal cut point (as the reference `super::cut_point`, bit for bit): the nearest wire
 /// point to (sx, sy) within ±[`CAUSAL_WINDOW`] of normalised wire arc length around `u`, as its
-/// arc position in mm and segment; ties keep the earlier segment. Finds the window's segments
-/// by binary search, starts from the block at arc position u, then visits only groups and
-/// blocks whose bounding box could hold a nearer point.
+/// arc position in mm and segment; ties keep the earlier segment.
+#[cfg(test)]
 pub(super) fn cut_point(w: &WireSegments, sx: f64, sy: f64, u: f64) -> (f64, usize) {
+    cut_point_from(w, sx, sy, u, None)
+}
+
+/// [`cut_point`], starting from segment `hint` (the previous panel's cut segment) if it lies
+/// in the window: finds the window's segments by binary search, scans the block holding the
+/// hint (else the one at arc position u), then visits only groups and blocks whose bounding
+/// box could hold a nearer point. Whole blocks are scanned in f64 lanes.
+#[inline(always)]
+pub(super) fn cut_point_from(
+    w: &WireSegments,
+    sx: f64,
+    sy: f64,
+    u: f64,
+    hint: Option<usize>,
+) -> (f64, usize) {
     let lo = (u - CAUSAL_WINDOW).max(0.0) * w.total;
     let hi = (u + CAUSAL_WINDOW).min(1.0) * w.total;
     let m = w.len();
@@ -380,12 +428,89 @@ pub(super) fn cut_point(w: &WireSegments, sx: f64, sy: f64, u: f64) -> (f64, usi
     let slack = 1e-9 * w.total;
     let j0 = partition(m, |j| w.s0[j] + w.len[j] < lo - slack);
     let j1 = partition(m, |j| w.s0[j] <= hi + slack);
-    let mut best = (f64::INFINITY, lo, 0usize);
     if j0 >= j1 {
         return (lo, 0);
     }
-    let scan = |b: usize, best: &mut (f64, f64, usize)| {
-        for j in (b * BLOCK).max(j0)..((b + 1) * BLOCK).min(j1) {
+    let win = Window {
+        lo,
+        hi,
+        j0,
+        j1,
+        sx,
+        sy,
+    };
+    let mut best = (f64::INFINITY, lo, 0usize);
+    let box_d2 = |bb: &[f64; 4]| {
+        let dx = (bb[0] - sx).max(sx - bb[2]).max(0.0);
+        let dy = (bb[1] - sy).max(sy - bb[3]).max(0.0);
+        dx * dx + dy * dy
+    };
+    let guess = match hint {
+        Some(j) if (j0..j1).contains(&j) => j,
+        _ => (partition(m, |j| w.s0[j] <= u * w.total).saturating_sub(1)).clamp(j0, j1 - 1),
+    };
+    let first = guess / BLOCK;
+    scan_block(w, first, &win, &mut best);
+    let (b0, b1) = (j0 / BLOCK, (j1 - 1) / BLOCK + 1);
+    for g in b0 / GROUP..(b1 - 1) / GROUP + 1 {
+        if box_d2(&w.groups[g]) > best.0 {
+            continue;
+        }
+        for b in (g * GROUP).max(b0)..((g + 1) * GROUP).min(b1) {
+            if b != first && box_d2(&w.blocks[b]) <= best.0 {
+                scan_block(w, b, &win, &mut best);
+            }
+        }
+    }
+    (best.1, best.2)
+}
+
+/// The causal window of one cut point search: arc positions `lo..=hi` (mm), segments
+/// `j0..j1` that may touch it, and the site.
+struct Window {
+    lo: f64,
+    hi: f64,
+    j0: usize,
+    j1: usize,
+    sx: f64,
+    sy: f64,
+}
+
+/// Offers every segment of block `b` in the window to `best` = (d², arc position, segment):
+/// the reference's per-segment formula, in [`BLOCK`] f64 lanes for a whole block.
+#[inline(always)]
+fn scan_block(w: &WireSegments, b: usize, win: &Window, best: &mut (f64, f64, usize)) {
+    let start = b * BLOCK;
+    let (lo, hi, sx, sy) = (win.lo, win.hi, win.sx, win.sy);
+    let mut offer = |d2: f64, s: f64, j: usize| {
+        if d2 < best.0 || (d2 == best.0 && j < best.2) {
+            *best = (d2, s, j);
+        }
+    };
+    if start >= win.j0 && start + BLOCK <= win.j1 {
+        let lanes = |v: &[f64]| -> [f64; BLOCK] { v[start..start + BLOCK].try_into().unwrap() };
+        let (ax, ay, wx, wy) = (lanes(&w.ax), lanes(&w.ay), lanes(&w.wx), lanes(&w.wy));
+        let (len, s0) = (lanes(&w.len), lanes(&w.s0));
+        let (mut d2, mut at) = ([0.0; BLOCK], [0.0; BLOCK]);
+        for k in 0..BLOCK {
+            let (p, q) = ((lo - s0[k]).max(0.0), (hi - s0[k]).min(len[k]));
+            let (rx, ry) = (ax[k] - sx, ay[k] - sy);
+            let x0 = rx * wx[k] + ry * wy[k];
+            // = clamp(−x0, p, q) where p ≤ q; lanes with p > q are out of the window.
+            let sigma = (-x0).max(p).min(q);
+            let (dx, dy) = (rx + sigma * wx[k], ry + sigma * wy[k]);
+            d2[k] = if p > q {
+                f64::INFINITY
+            } else {
+                dx * dx + dy * dy
+            };
+            at[k] = s0[k] + sigma;
+        }
+        for k in 0..BLOCK {
+            offer(d2[k], at[k], start + k);
+        }
+    } else {
+        for j in start.max(win.j0)..(start + BLOCK).min(win.j1) {
             let (s0, l) = (w.s0[j], w.len[j]);
             let (p, q) = ((lo - s0).max(0.0), (hi - s0).min(l));
             if p > q {
@@ -395,36 +520,13 @@ pub(super) fn cut_point(w: &WireSegments, sx: f64, sy: f64, u: f64) -> (f64, usi
             let x0 = rx * w.wx[j] + ry * w.wy[j];
             let sigma = (-x0).clamp(p, q);
             let (dx, dy) = (rx + sigma * w.wx[j], ry + sigma * w.wy[j]);
-            let d2 = dx * dx + dy * dy;
-            if d2 < best.0 || (d2 == best.0 && j < best.2) {
-                *best = (d2, s0 + sigma, j);
-            }
-        }
-    };
-    let box_d2 = |bb: &[f64; 4]| {
-        let dx = (bb[0] - sx).max(sx - bb[2]).max(0.0);
-        let dy = (bb[1] - sy).max(sy - bb[3]).max(0.0);
-        dx * dx + dy * dy
-    };
-    let guess = (partition(m, |j| w.s0[j] <= u * w.total).saturating_sub(1)).clamp(j0, j1 - 1);
-    let first = guess / BLOCK;
-    scan(first, &mut best);
-    let (b0, b1) = (j0 / BLOCK, (j1 - 1) / BLOCK + 1);
-    for g in b0 / GROUP..(b1 - 1) / GROUP + 1 {
-        if box_d2(&w.groups[g]) > best.0 {
-            continue;
-        }
-        for b in (g * GROUP).max(b0)..((g + 1) * GROUP).min(b1) {
-            if b != first && box_d2(&w.blocks[b]) <= best.0 {
-                scan(b, &mut best);
-            }
+            offer(dx * dx + dy * dy, s0 + sigma, j);
         }
     }
-    (best.1, best.2)
 }
 
 /// The first index in 0..n where `pred` turns false (`pred` true on a prefix).
-#[inline]
+#[inline(always)]
 fn partition(n: usize, pred: impl Fn(usize) -> bool) -> usize {
     let (mut lo, mut hi) = (0, n);
     while lo < hi {

@@ -460,7 +460,12 @@ proptest! {
         wire.insert(r, wire[r]);
         let Ok(w) = WireSegments::from_points(&wire) else { return Ok(()) };
         for (x, y, u) in sites {
-            prop_assert_eq!(fast::cut_point(&w, x, y, u), cut_point(&w, x, y, u));
+            let reference = cut_point(&w, x, y, u);
+            prop_assert_eq!(fast::cut_point(&w, x, y, u), reference);
+            // Whatever the hint (in the window or not).
+            for hint in [0, repeat % w.len(), w.len() - 1, w.len() + 3] {
+                prop_assert_eq!(fast::cut_point_from(&w, x, y, u, Some(hint)), reference);
+            }
         }
     }
 }
@@ -472,14 +477,23 @@ fn fast_cut_point_is_the_reference_cut_point_on_foils() {
         let surface = Panels::from_points(f.resampled_cosine(300).unwrap().points()).unwrap();
         let w = WireSegments::from_points(Baseline::fixed_offset(&f, 0.5, 450).unwrap().points())
             .unwrap();
+        let mut hint = None;
         for i in 0..surface.len() {
             let s = surface.midpoint(i);
             let u = surface.arc_position(i);
+            let reference = cut_point(&w, s.x, s.y, u);
             assert_eq!(
                 fast::cut_point(&w, s.x, s.y, u),
-                cut_point(&w, s.x, s.y, u),
+                reference,
                 "{name} panel {i}"
             );
+            // As the fast path runs it: from the previous panel's cut segment.
+            assert_eq!(
+                fast::cut_point_from(&w, s.x, s.y, u, hint),
+                reference,
+                "{name} panel {i}"
+            );
+            hint = Some(reference.1);
         }
     }
 }
@@ -510,25 +524,36 @@ fn ln_and_atan2_accuracy() {
             worst_ln = worst_ln.max(((fused as f64 - exact) / exact).abs());
         }
     }
-    // atan2 over the upper half plane: absolute error.
-    let mut worst_atan: f64 = 0.0;
+    // atan2(y, x)/d over the upper half plane: absolute error of the angle (d = 1) and
+    // relative error of the quotient.
+    let (mut worst_atan, mut worst_over): (f64, f64) = (0.0, 0.0);
     for i in 0..=2000 {
         let a = std::f64::consts::PI * i as f64 / 2000.0;
         for r in [1e-6, 1e-2, 1.0, 37.0, 1e5] {
             let (y, x) = ((r * a.sin()).max(0.0) as f32, (r * a.cos()) as f32);
             let exact = (y as f64).atan2(x as f64);
-            for got in [
-                fast::atan2_upper::<false>(y, x),
-                fast::atan2_upper::<true>(y, x),
-            ] {
-                worst_atan = worst_atan.max((got as f64 - exact).abs());
+            for d in [0.05f32, 0.5, 1.0, 7.0] {
+                for got in [
+                    fast::atan2_over::<false>(y, x, d),
+                    fast::atan2_over::<true>(y, x, d),
+                ] {
+                    let got = got as f64 * d as f64;
+                    worst_over = worst_over.max((got - exact).abs() / exact.max(1e-30));
+                    if d == 1.0 {
+                        worst_atan = worst_atan.max((got - exact).abs());
+                    }
+                }
             }
         }
     }
-    eprintln!("ln max relative error {worst_ln:e}, atan2 max absolute error {worst_atan:e} rad");
+    eprintln!(
+        "ln max relative error {worst_ln:e}, atan2 max absolute error {worst_atan:e} rad, \
+         atan2/d max relative error {worst_over:e}"
+    );
     assert!(worst_ln < 2e-7, "ln: {worst_ln:e}");
-    assert!(worst_atan < 3e-7, "atan2: {worst_atan:e}");
-    assert_eq!(fast::atan2_upper::<false>(0.0, 0.0), 0.0);
+    assert!(worst_atan < 5e-7, "atan2: {worst_atan:e}");
+    assert!(worst_over < 4e-7, "atan2/d: {worst_over:e}");
+    assert_eq!(fast::atan2_over::<false>(0.0, 0.0, 0.5), 0.0);
     assert_eq!(fast::ln::<true>(1.0), 0.0);
 }
 
