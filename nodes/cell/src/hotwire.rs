@@ -58,6 +58,10 @@ pub struct HotwireArgs {
     /// Cutting feed of the faster foam face [mm/s].
     #[arg(long, value_name = "MM_S")]
     pub feed: Option<f64>,
+    /// Make the feed along the path a design variable too (0.5–1.5 × --feed, constant
+    /// current): slower where the surface needs more heat.
+    #[arg(long)]
+    pub optimise_feed: bool,
     /// CSE values for the calibration table in report.json (seed 000 §IV.D; default: 0.5 to
     /// 1.5 times the plan's CSE in 11 steps).
     #[arg(long, value_name = "CSE,…", value_delimiter = ',')]
@@ -178,6 +182,12 @@ pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
         cse: a.cse,
         feed_mm_s: a.feed.unwrap_or(defaults.feed_mm_s),
         panels: a.panels.unwrap_or(defaults.panels),
+        objective: cell_planner::pso::Objective {
+            feed: a
+                .optimise_feed
+                .then(cell_planner::pso::FeedVariable::default),
+            ..defaults.objective
+        },
         pso: PsoConfig {
             iterations: a.iterations.unwrap_or(defaults.pso.iterations),
             particles: a.particles.unwrap_or(defaults.pso.particles),

@@ -346,6 +346,9 @@ pub struct SectionPlan {
     pub final_loss: f64,
     /// (iteration, best loss) at iteration 0 and at every improvement.
     pub loss_history: Vec<(usize, f64)>,
+    /// Feed / nominal feed at each point of the optimised path as optimised (all 1 unless the
+    /// feed is a variable, [`Objective::feed`]).
+    pub feed_ratio: Vec<f64>,
 }
 
 /// A run of carriage moves in machine coordinates (mm, mm/s, A). Point k is reached by move
@@ -656,6 +659,12 @@ fn plan_section(
         Baseline::fixed_offset(&foil, s.offset_mm, path_points).map_err(|e| wrap(e.into()))?;
     let objective = Objective {
         cse: job.cse,
+        // Only the root's feed is a variable: the wire has one timing for both faces.
+        feed: if s.frame_id == SECTION_FRAME_ID {
+            job.objective.feed
+        } else {
+            None
+        },
         ..job.objective
     };
     // A sharp trailing edge repeats its point at both ends: one more point gives N panels.
@@ -691,7 +700,13 @@ fn plan_section(
     let optimised = problem.path(&result.controls);
     let optimised_exposure = problem.exposure(&result.controls).map_err(wrap)?;
     let cse = problem.cse();
+    // Point k is reached by segment k − 1; point 0 takes segment 0's ratio.
+    let segment_ratios = problem.feed_ratios(&result.controls);
+    let mut feed_ratio = Vec::with_capacity(optimised.len());
+    feed_ratio.push(segment_ratios.first().copied().unwrap_or(1.0));
+    feed_ratio.extend_from_slice(&segment_ratios);
     let plan = SectionPlan {
+        feed_ratio,
         airfoil: loaded.name().to_string(),
         chord_mm,
         foil: foil.points().to_vec(),
@@ -828,9 +843,16 @@ pub fn plan_observed(
     }
     .unwrap_or_else(|| (root.optimised.clone(), root.optimised.clone()));
     let mut tip_plan = tip_plan;
+    // Feed ratios at the cut points: as optimised, or carried onto the resampled points by arc
+    // length (the resampled points lie on the optimised path).
+    let cut_ratios = if tip_plan.is_some() {
+        along_arc(&root.optimised, &root.feed_ratio, &root_cut)
+    } else {
+        root.feed_ratio.clone()
+    };
     if let Some(t) = tip_plan.as_mut() {
-        refresh_exposure(job, &mut root, &root_cut)?;
-        refresh_exposure(job, t, &tip_cut)?;
+        refresh_exposure(job, &mut root, &root_cut, &cut_ratios)?;
+        refresh_exposure(job, t, &tip_cut, &vec![1.0; tip_cut.len()])?;
     }
 
     // Leads: straight along each chord line, from behind the TE.
@@ -861,17 +883,18 @@ pub fn plan_observed(
         towers,
         feed_mm_s: job.feed_mm_s,
         max_feed_mm_s: job.machine.max_feed_mm_s,
-        schedule: proc.schedule,
+        // With the feed a variable the current stays constant (see `FeedVariable`).
+        schedule: proc.schedule.filter(|_| job.objective.feed.is_none()),
         supply: proc.supply,
         current_a: job.current_a,
     };
     let (r, t) = place(&[root_out, root_cut[0]], &[tip_out, tip_cut[0]]);
-    let lead_in = mover.motion(&r, &t, &mut notes)?;
+    let lead_in = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
     let (r, t) = place(&root_cut, &tip_cut);
-    let cut = mover.motion(&r, &t, &mut notes)?;
+    let cut = mover.motion(&r, &t, &cut_ratios, &mut notes)?;
     let last = root_cut.len() - 1;
     let (r, t) = place(&[root_cut[last], root_out], &[tip_cut[last], tip_out]);
-    let lead_out = mover.motion(&r, &t, &mut notes)?;
+    let lead_out = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
     for (what, m) in [
         ("lead-in", &lead_in),
         ("cut", &cut),
@@ -940,19 +963,49 @@ fn synchronised(
     })
 }
 
+/// `values` (one per point of `path`) carried onto `onto` (points lying on `path`) by
+/// normalised arc length, linearly interpolated.
+fn along_arc(path: &[Point2<f64>], values: &[f64], onto: &[Point2<f64>]) -> Vec<f64> {
+    let arc = |p: &[Point2<f64>]| {
+        let mut s = vec![0.0];
+        for w in p.windows(2) {
+            s.push(s[s.len() - 1] + (w[1] - w[0]).norm());
+        }
+        let total = s[s.len() - 1].max(f64::MIN_POSITIVE);
+        s.iter().map(|v| v / total).collect::<Vec<f64>>()
+    };
+    let (from, to) = (arc(path), arc(onto));
+    to.iter()
+        .map(|&u| {
+            let j = from.partition_point(|&v| v < u).clamp(1, from.len() - 1);
+            let (u0, u1) = (from[j - 1], from[j]);
+            let t = if u1 > u0 { (u - u0) / (u1 - u0) } else { 0.0 };
+            values[j - 1] + t * (values[j] - values[j - 1])
+        })
+        .collect()
+}
+
 /// Recomputes a section's optimised exposure and statistics along `path` (the resampled path
-/// the wire really follows).
+/// the wire really follows) with feed ratio `ratios` at its points.
 fn refresh_exposure(
     job: &HotwireJob,
     section: &mut SectionPlan,
     path: &[Point2<f64>],
+    ratios: &[f64],
 ) -> Result<(), JobError> {
     let wrap = |e: crate::exposure::ExposureError| JobError::Plan {
         airfoil: section.airfoil.clone(),
         source: e.into(),
     };
     let panels = Panels::from_points(&section.surface).map_err(wrap)?;
-    section.optimised_exposure = job.objective.model.exposure(&panels, path).map_err(wrap)?;
+    let mut wire = crate::exposure::WireSegments::from_points(path).map_err(wrap)?;
+    let weights: Vec<f64> = ratios[1..].iter().map(|r| 1.0 / r).collect();
+    wire.set_weights(&weights).map_err(wrap)?;
+    section.optimised_exposure = vec![0.0; panels.len()];
+    job.objective
+        .model
+        .exposure_into(&panels, &wire, &mut section.optimised_exposure)
+        .map_err(wrap)?;
     section.optimised_stats = ExposureStats::of(&section.optimised_exposure, section.cse);
     Ok(())
 }
@@ -969,13 +1022,15 @@ struct Mover {
 
 impl Mover {
     /// Moves through the placed face points `root`, `tip` (machine XY frame): each lasts long
-    /// enough for the faster face to run at the feed ([`move_durations`]) and for the faster
+    /// enough for the faster face to run at the feed times `feed_ratio` of the point it
+    /// reaches ([`move_durations`]) and for the faster
     /// carriage to stay within the machine's feed limit; the wire current follows the faster
     /// face's speed (seed 001 constant-kerf schedule).
     fn motion(
         &self,
         root: &[Point2<f64>],
         tip: &[Point2<f64>],
+        feed_ratio: &[f64],
         notes: &mut Vec<String>,
     ) -> Result<Motion, JobError> {
         let (xy, uv): (Vec<_>, Vec<_>) = root
@@ -984,6 +1039,10 @@ impl Mover {
             .map(|(r, t)| self.towers.project(*r, *t))
             .unzip();
         let mut durations = move_durations(root, tip, self.feed_mm_s);
+        // Move k reaches point k + 1 at that point's feed ratio.
+        for (d, r) in durations.iter_mut().zip(&feed_ratio[1..]) {
+            *d /= r;
+        }
         let mut slowed = 0;
         let mut carriage_feed = Vec::with_capacity(durations.len());
         let mut face_speed = Vec::with_capacity(durations.len());
@@ -1132,11 +1191,10 @@ impl<F: FnMut(LiveMaps)> Live<'_, F> {
 
     /// Computes and hands out the maps of `controls` (skipped if the path is degenerate).
     fn show(&mut self, problem: &Problem, controls: &[f64], iteration: usize, frame: &str) {
-        let path = problem.path(controls);
         let model = problem.objective().model;
         let (Ok(exposure), Ok((rows, cols, values))) = (
-            model.exposure(problem.surface(), &path),
-            model.exposure_matrix(problem.surface(), &path),
+            problem.exposure(controls),
+            problem.exposure_matrix(controls),
         ) else {
             return;
         };
@@ -1597,6 +1655,39 @@ mod tests {
             |_| ControlFlow::Continue(()),
         );
         assert!(none.is_ok());
+    }
+
+    #[test]
+    fn an_optimised_feed_varies_within_its_band_at_constant_current() {
+        let job = HotwireJob {
+            objective: Objective {
+                feed: Some(crate::pso::FeedVariable::default()),
+                ..Objective::default()
+            },
+            ..small(4)
+        };
+        let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
+        let feeds = &p.cut.feed_mm_s;
+        assert!(feeds
+            .iter()
+            .all(|&f| (7.5 - 1e-9..=22.5 + 1e-9).contains(&f)));
+        assert!(
+            feeds.iter().any(|&f| (f - 15.0).abs() > 0.01),
+            "the feed moved"
+        );
+        assert!(
+            p.cut.current_a.iter().all(|&a| a == 3.0),
+            "constant current"
+        );
+        assert!(p.final_loss < p.baseline_loss);
+        // The reported exposure is the feed-weighted one the loss saw.
+        let fit = p
+            .optimised_exposure
+            .iter()
+            .map(|e| (e - p.cse).powi(2))
+            .sum::<f64>()
+            / p.optimised_exposure.len() as f64;
+        assert!(fit <= p.final_loss + 1e-12, "{fit} vs {}", p.final_loss);
     }
 
     #[test]

@@ -48,6 +48,9 @@ pub struct PlannerParams {
     pub twist_pivot_chord_fraction: f64,
     /// Nominal wire current [A] (sets the default offset; constant current as a fallback).
     pub current_a: f64,
+    /// Make the feed along the path a design variable (0.5–1.5 × `feed_mm_s`, constant
+    /// current).
+    pub optimise_feed: bool,
     /// Cutting feed [mm/s].
     pub feed_mm_s: f64,
     /// Straight lead-in / lead-out length behind the trailing edge [mm].
@@ -78,6 +81,7 @@ impl Default for PlannerParams {
             span_mm: job.span_mm,
             twist_pivot_chord_fraction: Placement::ROOT.pivot_chord_fraction,
             current_a: job.current_a,
+            optimise_feed: false,
             feed_mm_s: job.feed_mm_s,
             lead_in_mm: job.lead_in_mm,
             panels: job.panels,
@@ -151,6 +155,10 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
         current_a: p.current_a,
         cse: (goal.cse > 0.0).then_some(goal.cse),
         panels: p.panels,
+        objective: crate::pso::Objective {
+            feed: p.optimise_feed.then(crate::pso::FeedVariable::default),
+            ..defaults.objective
+        },
         pso: PsoConfig {
             particles: p.particles,
             iterations: if goal.iterations == 0 {
@@ -499,6 +507,17 @@ pub fn main(argv: Vec<String>) -> std::process::ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_shipped_params_file_parses_and_matches_the_defaults() {
+        let mut sources = cell_runtime::params::ParamSources::default();
+        let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/planner.yaml");
+        sources
+            .merge_file(std::path::Path::new(file), "/", "planner")
+            .unwrap();
+        let p: PlannerParams = sources.parse().unwrap();
+        assert_eq!(p, PlannerParams::default());
+    }
 
     #[test]
     fn goals_map_to_jobs_and_bad_ones_are_named() {

@@ -72,6 +72,9 @@ pub struct Objective {
     pub min_clearance_mm: f64,
     /// Number of spline control values K (default 32, as in the notes).
     pub control_points: usize,
+    /// Feed along the path as a second set of design variables (default `None`: constant
+    /// feed, the paper's experiments).
+    pub feed: Option<FeedVariable>,
 }
 
 impl Default for Objective {
@@ -82,7 +85,47 @@ impl Default for Objective {
             smoothing: 1e-3,
             min_clearance_mm: 0.1,
             control_points: 32,
+            feed: None,
         }
+    }
+}
+
+/// Feed along the path as an optimisation variable: seed 000 writes the exposure as Ê(c, f)
+/// without defining f (ambiguity 5 of the notes); here f is the feed.
+///
+/// The feed ratio ρ(u) = feed / nominal feed is a periodic cubic B-spline of ln ρ over the
+/// baseline's normalised arc length u, clamped to [`FeedVariable::min_ratio`],
+/// [`FeedVariable::max_ratio`]. At a constant wire power a slower wire heats the surface
+/// longer, so wire segment j's exposure is weighted by 1/ρ(uⱼ) (its dwell time per mm relative
+/// to the nominal, [`crate::exposure::WireSegments::set_weights`]). The plan then holds the
+/// wire current constant: a constant-kerf schedule would cancel exactly this effect.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FeedVariable {
+    /// Control values of the ln ρ spline (default 16).
+    pub control_points: usize,
+    /// Slowest feed as a fraction of the nominal (default 0.5).
+    pub min_ratio: f64,
+    /// Fastest feed as a fraction of the nominal (default 1.5).
+    pub max_ratio: f64,
+}
+
+impl Default for FeedVariable {
+    fn default() -> Self {
+        Self {
+            control_points: 16,
+            min_ratio: 0.5,
+            max_ratio: 1.5,
+        }
+    }
+}
+
+impl FeedVariable {
+    /// ρ(u) for the ln ρ spline `controls` (module docs of [`FeedVariable`]).
+    pub fn ratio(&self, controls: &[f64], u: f64) -> f64 {
+        crate::trajectory::periodic_cubic_bspline(controls, u)
+            .exp()
+            .clamp(self.min_ratio, self.max_ratio)
     }
 }
 
@@ -167,6 +210,8 @@ pub struct Problem {
     trajectory: Trajectory,
     objective: Objective,
     cse: f64,
+    /// Normalised baseline arc length at each wire segment's middle (for the feed spline).
+    segment_u: Vec<f64>,
 }
 
 /// Reusable buffers for one loss evaluation (no allocation per evaluation once warm).
@@ -175,6 +220,7 @@ pub struct Scratch {
     path: Vec<Point2<f64>>,
     wire: WireSegments,
     exposure: Vec<f64>,
+    weights: Vec<f64>,
 }
 
 impl Problem {
@@ -204,6 +250,26 @@ impl Problem {
                 });
             }
         }
+        if let Some(f) = objective.feed {
+            if !(f.min_ratio.is_finite()
+                && f.min_ratio > 0.0
+                && f.max_ratio.is_finite()
+                && f.max_ratio >= f.min_ratio)
+            {
+                return Err(PsoError::InvalidParameter {
+                    name: "feed.min_ratio",
+                    value: f.min_ratio,
+                    requirement: "0 < min_ratio <= max_ratio, both finite",
+                });
+            }
+            if f.control_points == 0 {
+                return Err(PsoError::InvalidParameter {
+                    name: "feed.control_points",
+                    value: 0.0,
+                    requirement: ">= 1",
+                });
+            }
+        }
         if let Some(c) = objective.cse {
             if !c.is_finite() {
                 return Err(PsoError::InvalidParameter {
@@ -224,6 +290,11 @@ impl Problem {
             });
         }
         let surface = Panels::from_points(foil.resampled_cosine(surface_panels)?.points())?;
+        let segment_u = baseline
+            .arc_positions()
+            .windows(2)
+            .map(|w| 0.5 * (w[0] + w[1]))
+            .collect();
         let trajectory = Trajectory::new(baseline, objective.control_points)?;
         let mut p = Self {
             grid: OutlineGrid::new(&outline),
@@ -231,11 +302,12 @@ impl Problem {
             trajectory,
             objective,
             cse: 0.0,
+            segment_u,
         };
         p.cse = match objective.cse {
             Some(c) => c,
             None => {
-                let e = p.exposure(&vec![0.0; objective.control_points])?;
+                let e = p.exposure(&vec![0.0; p.dimension()])?;
                 e.iter().sum::<f64>() / e.len() as f64
             }
         };
@@ -262,9 +334,44 @@ impl Problem {
         &self.trajectory
     }
 
-    /// The wire path for `controls`.
+    /// Number of design variables: the K path controls, then the feed controls if the feed
+    /// is a variable ([`Objective::feed`]).
+    pub fn dimension(&self) -> usize {
+        self.trajectory.control_points() + self.objective.feed.map_or(0, |f| f.control_points)
+    }
+
+    /// The wire path for the design vector `controls` (its first K values).
     pub fn path(&self, controls: &[f64]) -> Vec<Point2<f64>> {
         self.trajectory.path(controls)
+    }
+
+    /// The feed ratio ρ of each wire segment for `controls` (all 1 without a feed variable).
+    pub fn feed_ratios(&self, controls: &[f64]) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.feed_ratios_into(controls, &mut out);
+        out
+    }
+
+    fn feed_ratios_into(&self, controls: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        let k = self.trajectory.control_points();
+        match self.objective.feed {
+            Some(f) if controls.len() > k => {
+                out.extend(self.segment_u.iter().map(|&u| f.ratio(&controls[k..], u)))
+            }
+            _ => out.resize(self.segment_u.len(), 1.0),
+        }
+    }
+
+    /// The wire segments of `controls`' path, weighted by the feed (1/ρ per segment).
+    ///
+    /// # Errors
+    /// A degenerate path (non-finite controls).
+    pub fn wire(&self, controls: &[f64]) -> Result<WireSegments, PsoError> {
+        let mut wire = WireSegments::from_points(&self.path(controls))?;
+        let weights: Vec<f64> = self.feed_ratios(controls).iter().map(|r| 1.0 / r).collect();
+        wire.set_weights(&weights)?;
+        Ok(wire)
     }
 
     /// True if the path for `controls` satisfies T ∩ G = ∅ with the clearance.
@@ -278,10 +385,30 @@ impl Problem {
     /// # Errors
     /// A degenerate path (non-finite controls).
     pub fn exposure(&self, controls: &[f64]) -> Result<Vec<f64>, PsoError> {
-        Ok(self
+        let wire = self.wire(controls)?;
+        let mut out = vec![0.0; self.surface.len()];
+        self.objective
+            .model
+            .exposure_into(&self.surface, &wire, &mut out)?;
+        Ok(out)
+    }
+
+    /// Every wire segment's contribution to every panel for `controls`, feed-weighted:
+    /// `(rows = segments, cols = panels, values)` as [`ExposureModel::exposure_matrix`].
+    ///
+    /// # Errors
+    /// A degenerate path (non-finite controls).
+    pub fn exposure_matrix(&self, controls: &[f64]) -> Result<(usize, usize, Vec<f32>), PsoError> {
+        let (rows, cols, mut values) = self
             .objective
             .model
-            .exposure(&self.surface, &self.path(controls))?)
+            .exposure_matrix(&self.surface, &self.path(controls))?;
+        for (row, r) in values.chunks_mut(cols).zip(self.feed_ratios(controls)) {
+            for v in row {
+                *v /= r as f32;
+            }
+        }
+        Ok((rows, cols, values))
     }
 
     /// The loss L(c) (module docs); +∞ for an infeasible or degenerate path or non-finite
@@ -300,6 +427,15 @@ impl Problem {
         {
             return f64::INFINITY;
         }
+        if self.objective.feed.is_some() {
+            self.feed_ratios_into(controls, &mut scratch.weights);
+            for w in &mut scratch.weights {
+                *w = 1.0 / *w;
+            }
+            if scratch.wire.set_weights(&scratch.weights).is_err() {
+                return f64::INFINITY;
+            }
+        }
         scratch.exposure.resize(self.surface.len(), 0.0);
         if self
             .objective
@@ -316,10 +452,13 @@ impl Problem {
             .map(|e| (e - self.cse).powi(2))
             .sum::<f64>()
             / n;
-        let k = controls.len();
-        let smooth: f64 = (0..k)
-            .map(|i| (controls[(i + 1) % k] - controls[i]).powi(2))
-            .sum();
+        // Cyclic smoothing of the path controls and, separately, of the feed controls.
+        let cyclic = |c: &[f64]| -> f64 {
+            let k = c.len();
+            (0..k).map(|i| (c[(i + 1) % k] - c[i]).powi(2)).sum()
+        };
+        let k = self.trajectory.control_points().min(controls.len());
+        let smooth = cyclic(&controls[..k]) + cyclic(&controls[k..]);
         let l = fit + self.objective.smoothing * smooth;
         if l.is_nan() {
             f64::INFINITY
@@ -381,7 +520,7 @@ pub fn optimise(
     mut progress: impl FnMut(Progress) -> ControlFlow<()>,
 ) -> Result<PsoResult, PsoError> {
     config.validate()?;
-    let k = problem.trajectory.control_points();
+    let k = problem.dimension();
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let mut scratch = Scratch::default();
     let v0 = config.initial_velocity_mm;
@@ -530,6 +669,42 @@ mod tests {
             assert!(p.is_feasible(&r.controls), "{name}");
             assert!(r.history.windows(2).all(|h| h[1].1 < h[0].1));
         }
+    }
+
+    #[test]
+    fn feed_variable_weights_the_exposure_by_dwell_time() {
+        let f = foil("e387", 200.0);
+        let baseline = Baseline::fixed_offset(&f, 0.5, 80).unwrap();
+        let feed = FeedVariable::default();
+        let objective = Objective {
+            feed: Some(feed),
+            ..Objective::default()
+        };
+        let p = Problem::new(&f, 60, baseline, objective).unwrap();
+        assert_eq!(p.dimension(), 32 + 16);
+        let mut x = vec![0.0; p.dimension()];
+        let nominal = p.exposure(&x).unwrap();
+        assert!(p.feed_ratios(&x).iter().all(|&r| r == 1.0));
+        // Half the feed everywhere: every panel is heated twice as long.
+        x[32..].fill(0.5f64.ln());
+        let slow = p.exposure(&x).unwrap();
+        assert!(nominal
+            .iter()
+            .zip(&slow)
+            .all(|(a, b)| (b - 2.0 * a).abs() <= 1e-4 * a.abs().max(1e-9)));
+        // Ratios are clamped to the band.
+        x[32..].fill(10.0);
+        assert!(p.feed_ratios(&x).iter().all(|&r| r == feed.max_ratio));
+
+        let r = optimise(&p, &small(5), |_| ControlFlow::Continue(())).unwrap();
+        assert_eq!(r.controls.len(), 48);
+        assert!(r.best_loss < r.baseline_loss);
+        assert!(p.is_feasible(&r.controls));
+        let ratios = p.feed_ratios(&r.controls);
+        assert!(ratios
+            .iter()
+            .all(|&q| (feed.min_ratio..=feed.max_ratio).contains(&q)));
+        assert!(ratios.iter().any(|&q| q != 1.0), "the feed moved");
     }
 
     #[test]
