@@ -1690,6 +1690,51 @@ mod tests {
         assert!(fit <= p.final_loss + 1e-12, "{fit} vs {}", p.final_loss);
     }
 
+    /// The quality bar, with the paper's default law (1/‖R‖): on three real sections the
+    /// optimised path is clearly more uniform than the fixed offset, never touches the foil and
+    /// stays within the machine's travel.
+    #[test]
+    fn optimised_paths_beat_the_fixed_offset_on_three_airfoils() {
+        for name in ["s1223", "clarky", "e387"] {
+            let job = HotwireJob {
+                root_airfoil: AirfoilSource::parse(name),
+                panels: 60,
+                pso: PsoConfig {
+                    particles: 10,
+                    iterations: 400,
+                    restart_every: 100,
+                    // A short run explores faster with larger restart velocities.
+                    initial_velocity_mm: 0.5,
+                    ..PsoConfig::default()
+                },
+                seed: 11,
+                ..HotwireJob::default()
+            };
+            let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
+            let (b, o) = (p.baseline_stats, p.optimised_stats);
+            eprintln!(
+                "{name}: RMS {:.4} -> {:.4} ({:.0} %), max {:.4} -> {:.4}, CV {:.4} -> {:.4}",
+                b.rms,
+                o.rms,
+                100.0 * (1.0 - o.rms / b.rms),
+                b.max_abs,
+                o.max_abs,
+                b.cv,
+                o.cv
+            );
+            // Measured: 15–19 % lower RMS in this short run (400 iterations, 10 particles).
+            assert!(o.rms <= 0.9 * b.rms, "{name}: RMS {} -> {}", b.rms, o.rms);
+            assert!(
+                p.is_feasible(Objective::default().min_clearance_mm),
+                "{name}"
+            );
+            for (xy, uv) in p.carriage_positions() {
+                let at = [('X', xy.x), ('Y', xy.y), ('U', uv.x), ('V', uv.y)];
+                assert!(job.machine.check_position(&at).is_ok(), "{name}: {xy} {uv}");
+            }
+        }
+    }
+
     #[test]
     fn material_aliases_resolve() {
         let lib = MaterialLibrary::builtin();
