@@ -183,7 +183,7 @@ pub struct Panels {
 
 impl Panels {
     /// Panels of the closed polygon `points` (mm, anticlockwise, Selig order): panel i runs
-    /// points[i] → points[i+1], the last one closes back to points[0]. A repeated first point at
+    /// `points[i]` → `points[i+1]`, the last one closes back to `points[0]`. A repeated first point at
     /// the end and exact duplicate consecutive points are dropped first, so there are no
     /// zero-length panels; N = number of distinct points.
     ///
@@ -270,6 +270,7 @@ impl Panels {
     }
 
     /// Panel i as an evaluation site; `literal` is the PaperLiteral surface factor ℓᵢ·N.
+    #[inline]
     fn site(&self, i: usize) -> Site {
         Site {
             x: self.sx[i],
@@ -314,14 +315,18 @@ pub struct WireSegments {
     /// len and weight, all zero-padded to M + 1 + [`fast::LANES`].
     f32: [Vec<f32>; 6],
     /// Bounding boxes [xmin, ymin, xmax, ymax] of every [`fast::BLOCK`] consecutive segments,
-    /// slightly inflated (cut point pruning, visibility skipping).
+    /// slightly inflated (cut point pruning).
     blocks: Vec<[f64; 4]>,
-    /// Bounding boxes of every [`fast::GROUP`] consecutive blocks.
+    /// The same boxes as four arrays (xmin, ymin, xmax, ymax), padded with empty boxes to
+    /// whole groups, for testing a group's blocks in lanes.
+    block_lanes: [Vec<f64>; 4],
+    /// Bounding boxes of every [`fast::GROUP`] consecutive blocks (cut point pruning,
+    /// visibility skipping).
     groups: Vec<[f64; 4]>,
 }
 
 impl WireSegments {
-    /// Segments of the open polyline `points` (mm): segment j runs points[j] → points[j+1], so
+    /// Segments of the open polyline `points` (mm): segment j runs `points[j]` → `points[j+1]`, so
     /// M = points.len() − 1 (a closed path repeats its first point at the end). Zero-length
     /// segments are kept (they contribute nothing) so row j of [`ExposureModel::exposure_matrix`]
     /// is always segment j.
@@ -458,6 +463,12 @@ impl WireSegments {
             }
             self.blocks
                 .push([bb[0] - PAD, bb[1] - PAD, bb[2] + PAD, bb[3] + PAD]);
+        }
+        let padded = self.blocks.len().div_ceil(fast::GROUP) * fast::GROUP;
+        for (k, v) in self.block_lanes.iter_mut().enumerate() {
+            v.clear();
+            v.extend(self.blocks.iter().map(|b| b[k]));
+            v.resize(padded, if k < 2 { f64::INFINITY } else { -f64::INFINITY });
         }
         self.groups.clear();
         for g in self.blocks.chunks(fast::GROUP) {

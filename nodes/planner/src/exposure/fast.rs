@@ -4,13 +4,16 @@
 //!
 //! Per evaluation site (panel midpoint):
 //! 1. the causal cut point ([`cut_point_from`]): exact f64, the same answer as the reference's
-//!    scan, but only over the window (binary search on the arc length), starting from the
-//!    previous panel's cut, and pruned with the wire's block/group bounding boxes;
-//! 2. the segments before the cut (all of them with [`Causal::Off`]), skipping blocks whose
-//!    bounding box lies wholly on the inner side of the site's tangent line (χ = 0, eq. 3),
-//!    through the f32 lane kernel ([`run_sum`]), which also skips lane groups that are wholly
-//!    inside and leaves out the visibility clip where no lane needs it;
-//! 3. the cut segment itself in f64 through the reference's own segment formula.
+//!    scan, but only over the window (its ends carried on from the previous panel, binary
+//!    search otherwise), starting from the previous panel's cut, and pruned with the wire's
+//!    group and block bounding boxes (a group's blocks tested in lanes);
+//! 2. the segments before the cut (all of them with [`Causal::Off`]), skipping groups of
+//!    [`GROUP`]·[`BLOCK`] segments whose bounding box lies wholly on the inner side of the
+//!    site's tangent line (χ = 0, eq. 3), through the f32 lane kernel ([`run_sum`]), which
+//!    also skips lane groups that are wholly inside and leaves out the visibility clip where
+//!    no lane needs it;
+//! 3. the cut segment itself in f64 through the reference's own segment formula (scalar work
+//!    that overlaps the vector kernel's: folding it into the f32 lanes was no faster).
 //!
 //! Written by hand rather than with a SIMD crate's math functions: the kernel is plain f32
 //! arithmetic on fixed-length lane arrays that LLVM vectorises for whichever instruction set
@@ -73,7 +76,7 @@ fn exposure_with<const FMA: bool>(
 ) {
     let [sx, sy, tx, ty] = &surface.f32;
     let dmin = model.min_distance_mm as f32;
-    let mut hint = None;
+    let mut cursor = Cursor::default();
     for (i, e) in out.iter_mut().enumerate() {
         let s32 = Site32 {
             x: sx[i],
@@ -82,7 +85,7 @@ fn exposure_with<const FMA: bool>(
             ty: ty[i],
             dmin,
         };
-        *e = site_value::<FMA>(model, wire, &surface.site(i), &s32, &mut hint);
+        *e = site_value::<FMA>(model, wire, &surface.site(i), &s32, &mut cursor);
     }
 }
 
@@ -104,9 +107,9 @@ pub(super) fn exposure_at(model: &ExposureModel, wire: &WireSegments, site: &Sit
         dmin: model.min_distance_mm as f32,
     };
     if selected_target!().supports_feature_str("fma") {
-        site_value::<true>(model, wire, site, &s32, &mut None)
+        site_value::<true>(model, wire, site, &s32, &mut Cursor::default())
     } else {
-        site_value::<false>(model, wire, site, &s32, &mut None)
+        site_value::<false>(model, wire, site, &s32, &mut Cursor::default())
     }
 }
 
@@ -117,21 +120,21 @@ fn site_value<const FMA: bool>(
     w: &WireSegments,
     site: &Site,
     s32: &Site32,
-    hint: &mut Option<usize>,
+    cursor: &mut Cursor,
 ) -> f64 {
     let m = w.len();
     let (end, cut) = match model.causal {
         Causal::CutPoint => {
-            let (cut_s, cut_j) = cut_point_from(w, site.x, site.y, site.u, *hint);
-            *hint = Some(cut_j);
+            let (cut_s, cut_j) = cut_point_from(w, site.x, site.y, site.u, cursor);
             (cut_j, Some((cut_s, cut_j)))
         }
         _ => (m, None),
     };
     let author = model.law == DistanceLaw::AuthorCode;
     let mut total = 0.0f64;
-    // Runs of blocks not wholly on the inner side of the tangent line. (No closure here: a
-    // closure would not inherit the clone's target features.)
+    // Runs of groups not wholly on the inner side of the tangent line (testing single blocks
+    // too cost more than it saved). No closure here: a closure would not inherit the clone's
+    // target features.
     let nblocks = end.div_ceil(BLOCK);
     let mut run: Option<usize> = None;
     for g in 0..nblocks.div_ceil(GROUP) {
@@ -139,12 +142,8 @@ fn site_value<const FMA: bool>(
             total += flush::<FMA>(w, &mut run, g * GROUP * BLOCK, end, s32, author);
             continue;
         }
-        for b in g * GROUP..((g + 1) * GROUP).min(nblocks) {
-            if inner_side(&w.blocks[b], site) {
-                total += flush::<FMA>(w, &mut run, b * BLOCK, end, s32, author);
-            } else if run.is_none() {
-                run = Some(b * BLOCK);
-            }
+        if run.is_none() {
+            run = Some(g * GROUP * BLOCK);
         }
     }
     total += flush::<FMA>(w, &mut run, end, end, s32, author);
@@ -406,31 +405,45 @@ fn fma<const FMA: bool>(a: f32, b: f32, c: f32) -> f32 {
 /// arc position in mm and segment; ties keep the earlier segment.
 #[cfg(test)]
 pub(super) fn cut_point(w: &WireSegments, sx: f64, sy: f64, u: f64) -> (f64, usize) {
-    cut_point_from(w, sx, sy, u, None)
+    cut_point_from(w, sx, sy, u, &mut Cursor::default())
 }
 
-/// [`cut_point`], starting from segment `hint` (the previous panel's cut segment) if it lies
-/// in the window: finds the window's segments by binary search, scans the block holding the
-/// hint (else the one at arc position u), then visits only groups and blocks whose bounding
-/// box could hold a nearer point. Whole blocks are scanned in f64 lanes.
+/// Search state carried from one panel to the next (they come in order of arc position, so
+/// the window and the cut point move forward a little each time).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Cursor {
+    /// The previous panel's cut segment.
+    pub(super) cut: Option<usize>,
+    /// The previous window's first segment and end (0 before the first panel).
+    pub(super) j0: usize,
+    pub(super) j1: usize,
+}
+
+/// [`cut_point`], carrying `cursor` on: finds the window's segments by moving the previous
+/// window's ends forward (binary search if they would have to move back), scans the block
+/// holding the previous cut segment if it lies in the window (else the one at arc position
+/// u), then visits only groups and blocks whose bounding box could hold a nearer point.
+/// Whole blocks are scanned in f64 lanes.
 #[inline(always)]
 pub(super) fn cut_point_from(
     w: &WireSegments,
     sx: f64,
     sy: f64,
     u: f64,
-    hint: Option<usize>,
+    cursor: &mut Cursor,
 ) -> (f64, usize) {
     let lo = (u - CAUSAL_WINDOW).max(0.0) * w.total;
     let hi = (u + CAUSAL_WINDOW).min(1.0) * w.total;
     let m = w.len();
     // A superset of the segments the reference accepts (p ≤ q below): slack for rounding.
     let slack = 1e-9 * w.total;
-    let j0 = partition(m, |j| w.s0[j] + w.len[j] < lo - slack);
-    let j1 = partition(m, |j| w.s0[j] <= hi + slack);
+    let j0 = advance(m, |j| w.s0[j] + w.len[j] < lo - slack, cursor.j0);
+    let j1 = advance(m, |j| w.s0[j] <= hi + slack, cursor.j1);
+    (cursor.j0, cursor.j1) = (j0, j1);
     if j0 >= j1 {
         return (lo, 0);
     }
+    let hint = cursor.cut;
     let win = Window {
         lo,
         hi,
@@ -456,13 +469,41 @@ pub(super) fn cut_point_from(
         if box_d2(&w.groups[g]) > best.0 {
             continue;
         }
-        for b in (g * GROUP).max(b0)..((g + 1) * GROUP).min(b1) {
-            if b != first && box_d2(&w.blocks[b]) <= best.0 {
+        // The group's blocks' boxes in lanes, then a scan of each that could hold a nearer
+        // point (padding boxes are empty: infinitely far).
+        let [x0, y0, x1, y1] = &w.block_lanes;
+        let at = g * GROUP;
+        let lanes = |v: &[f64]| -> [f64; GROUP] { v[at..at + GROUP].try_into().unwrap() };
+        let (x0, y0, x1, y1) = (lanes(x0), lanes(y0), lanes(x1), lanes(y1));
+        let mut near = [false; GROUP];
+        for k in 0..GROUP {
+            let dx = (x0[k] - sx).max(sx - x1[k]).max(0.0);
+            let dy = (y0[k] - sy).max(sy - y1[k]).max(0.0);
+            near[k] = dx * dx + dy * dy <= best.0;
+        }
+        for (k, &near) in near.iter().enumerate() {
+            let b = at + k;
+            if near && b != first && (b0..b1).contains(&b) {
                 scan_block(w, b, &win, &mut best);
             }
         }
     }
+    cursor.cut = Some(best.2);
     (best.1, best.2)
+}
+
+/// [`partition`] when it is known to be at least `from` (`pred(from − 1)` holds): steps forward
+/// from there; otherwise a binary search.
+#[inline(always)]
+fn advance(n: usize, pred: impl Fn(usize) -> bool, from: usize) -> usize {
+    if from > n || (from > 0 && !pred(from - 1)) {
+        return partition(n, pred);
+    }
+    let mut j = from;
+    while j < n && pred(j) {
+        j += 1;
+    }
+    j
 }
 
 /// The causal window of one cut point search: arc positions `lo..=hi` (mm), segments
@@ -482,11 +523,6 @@ struct Window {
 fn scan_block(w: &WireSegments, b: usize, win: &Window, best: &mut (f64, f64, usize)) {
     let start = b * BLOCK;
     let (lo, hi, sx, sy) = (win.lo, win.hi, win.sx, win.sy);
-    let mut offer = |d2: f64, s: f64, j: usize| {
-        if d2 < best.0 || (d2 == best.0 && j < best.2) {
-            *best = (d2, s, j);
-        }
-    };
     if start >= win.j0 && start + BLOCK <= win.j1 {
         let lanes = |v: &[f64]| -> [f64; BLOCK] { v[start..start + BLOCK].try_into().unwrap() };
         let (ax, ay, wx, wy) = (lanes(&w.ax), lanes(&w.ay), lanes(&w.wx), lanes(&w.wy));
@@ -506,8 +542,20 @@ fn scan_block(w: &WireSegments, b: usize, win: &Window, best: &mut (f64, f64, us
             };
             at[k] = s0[k] + sigma;
         }
+        // Most blocks scanned hold no nearer point: one lane-wise minimum decides.
+        let mut min = d2;
+        let mut width = BLOCK;
+        while width > 1 {
+            width /= 2;
+            for k in 0..width {
+                min[k] = min[k].min(min[k + width]);
+            }
+        }
+        if min[0] > best.0 {
+            return;
+        }
         for k in 0..BLOCK {
-            offer(d2[k], at[k], start + k);
+            offer(best, d2[k], at[k], start + k);
         }
     } else {
         for j in start.max(win.j0)..(start + BLOCK).min(win.j1) {
@@ -520,8 +568,16 @@ fn scan_block(w: &WireSegments, b: usize, win: &Window, best: &mut (f64, f64, us
             let x0 = rx * w.wx[j] + ry * w.wy[j];
             let sigma = (-x0).clamp(p, q);
             let (dx, dy) = (rx + sigma * w.wx[j], ry + sigma * w.wy[j]);
-            offer(dx * dx + dy * dy, s0 + sigma, j);
+            offer(best, dx * dx + dy * dy, s0 + sigma, j);
         }
+    }
+}
+
+/// Takes (d², arc position, segment) as the best if nearer, or as near and earlier.
+#[inline(always)]
+fn offer(best: &mut (f64, f64, usize), d2: f64, s: f64, j: usize) {
+    if d2 < best.0 || (d2 == best.0 && j < best.2) {
+        *best = (d2, s, j);
     }
 }
 

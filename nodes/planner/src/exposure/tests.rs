@@ -464,7 +464,8 @@ proptest! {
             prop_assert_eq!(fast::cut_point(&w, x, y, u), reference);
             // Whatever the hint (in the window or not).
             for hint in [0, repeat % w.len(), w.len() - 1, w.len() + 3] {
-                prop_assert_eq!(fast::cut_point_from(&w, x, y, u, Some(hint)), reference);
+                let mut cursor = fast::Cursor { cut: Some(hint), ..Default::default() };
+                prop_assert_eq!(fast::cut_point_from(&w, x, y, u, &mut cursor), reference);
             }
         }
     }
@@ -477,7 +478,7 @@ fn fast_cut_point_is_the_reference_cut_point_on_foils() {
         let surface = Panels::from_points(f.resampled_cosine(300).unwrap().points()).unwrap();
         let w = WireSegments::from_points(Baseline::fixed_offset(&f, 0.5, 450).unwrap().points())
             .unwrap();
-        let mut hint = None;
+        let mut cursor = fast::Cursor::default();
         for i in 0..surface.len() {
             let s = surface.midpoint(i);
             let u = surface.arc_position(i);
@@ -487,13 +488,23 @@ fn fast_cut_point_is_the_reference_cut_point_on_foils() {
                 reference,
                 "{name} panel {i}"
             );
-            // As the fast path runs it: from the previous panel's cut segment.
+            // As the fast path runs it: carried on from the previous panel.
             assert_eq!(
-                fast::cut_point_from(&w, s.x, s.y, u, hint),
+                fast::cut_point_from(&w, s.x, s.y, u, &mut cursor),
                 reference,
                 "{name} panel {i}"
             );
-            hint = Some(reference.1);
+        }
+        // Backwards too (the window ends then move back: binary search).
+        let mut cursor = fast::Cursor::default();
+        for i in (0..surface.len()).rev() {
+            let s = surface.midpoint(i);
+            let u = surface.arc_position(i);
+            assert_eq!(
+                fast::cut_point_from(&w, s.x, s.y, u, &mut cursor),
+                cut_point(&w, s.x, s.y, u),
+                "{name} panel {i} backwards"
+            );
         }
     }
 }
