@@ -206,6 +206,9 @@ pub struct PsoResult {
 pub struct Problem {
     /// The foil outline G, bucketed for the per-evaluation feasibility test.
     grid: OutlineGrid,
+    /// The baseline's clearance from G less the required clearance (mm): a path no point of
+    /// which moves further than this from the baseline is feasible without a test.
+    free_displacement_mm: f64,
     surface: Panels,
     trajectory: Trajectory,
     objective: Objective,
@@ -295,9 +298,15 @@ impl Problem {
             .windows(2)
             .map(|w| 0.5 * (w[0] + w[1]))
             .collect();
+        // The clearance is ≥ the required one (checked above); 1e-9 mm for rounding.
+        let free_displacement_mm =
+            crate::trajectory::clearance_mm(baseline.points(), &outline, f64::INFINITY)
+                - objective.min_clearance_mm
+                - 1e-9;
         let trajectory = Trajectory::new(baseline, objective.control_points)?;
         let mut p = Self {
             grid: OutlineGrid::new(&outline),
+            free_displacement_mm,
             surface,
             trajectory,
             objective,
@@ -411,20 +420,44 @@ impl Problem {
         Ok((rows, cols, values))
     }
 
+    /// T ∩ G = ∅ with the clearance for `path` = the trajectory of `controls`, answered
+    /// without geometry when no path point moves further from the baseline than
+    /// `free_displacement_mm` (a point of a path segment is then within that distance of the
+    /// baseline segment's corresponding point, so the clearance cannot drop below the
+    /// required one): first by the largest control value (the B-spline's weights are ≥ 0 and
+    /// sum to 1, so no displacement exceeds it), then by the largest displacement itself; else
+    /// by the outline grid ([`OutlineGrid::is_feasible`]).
+    fn is_clear(&self, controls: &[f64], path: &[Point2<f64>]) -> bool {
+        let free = self.free_displacement_mm;
+        let k = self.trajectory.control_points().min(controls.len());
+        if free > 0.0 {
+            if controls[..k].iter().all(|c| c.abs() < free) {
+                return true;
+            }
+            let base = self.trajectory.baseline().points();
+            if path.len() == base.len()
+                && path
+                    .iter()
+                    .zip(base)
+                    .all(|(p, b)| (p - b).norm_squared() < free * free)
+            {
+                return true;
+            }
+        }
+        self.grid.is_feasible(path, self.objective.min_clearance_mm)
+    }
+
     /// The loss L(c) (module docs); +∞ for an infeasible or degenerate path or non-finite
-    /// controls. Allocates nothing once `scratch` is warm; the feasibility test visits only
-    /// the outline near the path ([`OutlineGrid`]) and the exposure takes the model's fast
+    /// controls. Allocates nothing once `scratch` is warm; the feasibility test needs no geometry
+    /// while the path stays near the baseline, else visits only the outline near the path
+    /// ([`OutlineGrid`]), and the exposure takes the model's fast
     /// path when it has one ([`ExposureModel::exposure_into`]).
     pub fn loss(&self, controls: &[f64], scratch: &mut Scratch) -> f64 {
         if controls.iter().any(|c| !c.is_finite()) {
             return f64::INFINITY;
         }
         self.trajectory.path_into(controls, &mut scratch.path);
-        if !self
-            .grid
-            .is_feasible(&scratch.path, self.objective.min_clearance_mm)
-            || scratch.wire.set(&scratch.path).is_err()
-        {
+        if !self.is_clear(controls, &scratch.path) || scratch.wire.set(&scratch.path).is_err() {
             return f64::INFINITY;
         }
         if self.objective.feed.is_some() {
@@ -740,6 +773,33 @@ mod tests {
         assert!(r.cancelled);
         assert_eq!(r.iterations_run, 5);
         assert_eq!(seen, vec![1, 2, 3, 4, 5]);
+    }
+
+    /// The loss's clearance shortcut never accepts what the full test rejects, and agrees
+    /// with it on swarm-like candidates around the shortcut's threshold.
+    #[test]
+    fn clearance_shortcut_agrees_with_the_full_test() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for name in ["s1223", "clarky", "naca0012"] {
+            let p = problem(name);
+            let free = p.free_displacement_mm;
+            assert!(free > 0.0 && free < 0.5, "{name}: {free}");
+            let (mut shortcut, mut checked) = (0, 0);
+            for k in 0..400 {
+                let spread = free * [0.5, 1.0, 1.5, 3.0][k % 4];
+                let c: Vec<f64> = (0..32).map(|_| rng.random_range(-spread..spread)).collect();
+                let path = p.path(&c);
+                let full = p.grid.is_feasible(&path, p.objective.min_clearance_mm);
+                assert_eq!(p.is_clear(&c, &path), full, "{name} {k}");
+                if c.iter().all(|v| v.abs() < free) {
+                    shortcut += 1;
+                } else {
+                    checked += 1;
+                }
+            }
+            assert!(shortcut > 50 && checked > 50, "{shortcut} {checked}");
+        }
     }
 
     #[test]
