@@ -423,6 +423,10 @@ pub struct HotwirePlan {
     pub machine: String,
     /// Tower geometry the carriage moves were projected with.
     pub towers: Towers,
+    /// Where the root section's LE sits in XY machine coordinates (mm).
+    pub part_origin: Vector2<f64>,
+    /// How the tip section is placed relative to the root (ROOT on a straight cut).
+    pub tip_placement: Placement,
     /// True if the machine has a UV carriage (the toolpath carries secondary points).
     pub four_axis: bool,
     /// Straight lead-in from behind the trailing edge to the first cut point.
@@ -928,6 +932,8 @@ pub fn plan_observed(
         seed: job.seed,
         machine: job.machine.name.clone(),
         towers,
+        part_origin: origin,
+        tip_placement: placement,
         four_axis,
         lead_in,
         cut,
@@ -1220,6 +1226,53 @@ impl HotwirePlan {
                 .tip
                 .as_ref()
                 .is_none_or(|t| is_feasible(&t.optimised, &t.foil, min_clearance_mm))
+    }
+
+    /// The foils and the wire paths on their faces in machine coordinates (x, y, z along the
+    /// wire from the XY plane): `[(name, points)]` for the root foil and path at the root face
+    /// and, on a tapered panel, the tip's at the tip face. Closed polylines.
+    pub fn placed_sections(&self) -> Vec<(&'static str, Vec<[f64; 3]>)> {
+        let place = |pts: &[Point2<f64>], chord: f64, placement: &Placement, z: f64| {
+            let mut out: Vec<[f64; 3]> = pts
+                .iter()
+                .map(|p| {
+                    let q = placement.apply(chord, *p) + self.part_origin;
+                    [q.x, q.y, z]
+                })
+                .collect();
+            if out.first() != out.last() {
+                out.extend(out.first().copied());
+            }
+            out
+        };
+        let root_chord = self
+            .foil
+            .iter()
+            .map(|p| p.x)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let zr = self.towers.root_plane_mm;
+        let mut out = vec![
+            (
+                "root_foil",
+                place(&self.foil, root_chord, &Placement::ROOT, zr),
+            ),
+            (
+                "root_path",
+                place(&self.optimised, root_chord, &Placement::ROOT, zr),
+            ),
+        ];
+        if let Some(t) = &self.tip {
+            let zt = self.towers.tip_plane_mm;
+            out.push((
+                "tip_foil",
+                place(&t.foil, t.chord_mm, &self.tip_placement, zt),
+            ));
+            out.push((
+                "tip_path",
+                place(&t.optimised, t.chord_mm, &self.tip_placement, zt),
+            ));
+        }
+        out
     }
 
     /// Every carriage position of the plan (lead-in, cut, lead-out) as (XY, UV) pairs, in
@@ -1564,6 +1617,15 @@ mod tests {
                 assert!(face <= 15.0 + 1e-6, "{k}: face speed {face}");
             }
         }
+        let placed = p.placed_sections();
+        let names: Vec<&str> = placed.iter().map(|(n, _)| *n).collect();
+        assert_eq!(names, ["root_foil", "root_path", "tip_foil", "tip_path"]);
+        assert!(placed[1].1.iter().all(|q| q[2] == zr));
+        assert!(placed[3].1.iter().all(|q| q[2] == zt));
+        // The placed tip path is where the wire crosses the tip face.
+        let (xy, uv) = (p.cut.xy[5], p.cut.uv[5]);
+        let at_tip = xy + (uv - xy) * (zt / w);
+        assert!((at_tip.x - placed[3].1[5][0]).abs() < 1e-9);
         let tp = p.to_toolpath("panel");
         assert_ne!(tp.segments[1].points, tp.segments[1].secondary_points);
         assert_eq!(tp.segments[0].secondary_points.len(), 2);

@@ -221,14 +221,18 @@ fn log_to_rerun(node: &CellNode, plan: &HotwirePlan, toolpath: &Toolpath, profil
     let sink = node.rerun();
     sink.set_time(&toolpath.header.stamp, 0);
     if let Some(rec) = sink.stream() {
-        let mut foil: Vec<[f32; 3]> = plan
-            .foil
-            .iter()
-            .map(|p| [p.x as f32, p.y as f32, 0.0])
-            .collect();
-        foil.extend(foil.first().copied());
-        if let Err(e) = rec.log("/hotwire/foil", &rerun::LineStrips3D::new([foil])) {
-            tracing::warn!("rerun: {e}");
+        // Foils and face paths where they sit in the machine, beside the carriage paths.
+        for (name, pts) in plan.placed_sections() {
+            let strip: Vec<[f32; 3]> = pts
+                .iter()
+                .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
+                .collect();
+            if let Err(e) = rec.log(
+                format!("/hotwire/{name}"),
+                &rerun::LineStrips3D::new([strip]),
+            ) {
+                tracing::warn!("rerun: {e}");
+            }
         }
         for &(it, loss) in &plan.loss_history {
             rec.set_time_sequence("iteration", it as i64);

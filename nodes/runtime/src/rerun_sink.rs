@@ -5,9 +5,12 @@
 //!
 //! | entity path                    | what                                    | logged by        |
 //! |--------------------------------|-----------------------------------------|------------------|
-//! | `/hotwire/trajectory`          | wire path, root (XY) plane              | planner          |
-//! | `/hotwire/trajectory_tip`      | wire path, tip (UV) plane               | planner          |
-//! | `/hotwire/exposure`            | exposure matrix / profile (HeatMap)     | planner          |
+//! | `/hotwire/trajectory`          | wire path, XY carriage plane            | planner          |
+//! | `/hotwire/trajectory_tip`      | wire path, UV carriage plane            | planner          |
+//! | `/hotwire/{root,tip}_{foil,path}` | foil and wire path on each foam face | planner          |
+//! | `/hotwire/exposure`            | final exposure profile (HeatMap)        | planner          |
+//! | `/hotwire/live/{root,tip}/…`   | current best's profile and matrix       | planner          |
+//! | `/hotwire/loss`                | best loss on the `iteration` timeline   | planner          |
 //! | `/sheet/toolpath`              | cut order and travel moves              | sequencer        |
 //! | `/sheet/heat`                  | sheet temperature raster (HeatMap)      | sequencer        |
 //! | `/waam/toolpath`, `/waam/layers` | bead paths, slices                    | slicer           |
