@@ -25,25 +25,25 @@ pub struct HotwireArgs {
     /// Airfoil: an embedded name (e.g. s1223) or a UIUC .dat file.
     #[arg(long, value_name = "NAME|FILE")]
     pub airfoil: String,
-    /// Chord [mm].
+    /// Chord (mm).
     #[arg(long, value_name = "MM")]
     pub chord: f64,
     /// Tip airfoil of a tapered panel (default: the root's); needs a 4-axis machine.
     #[arg(long, value_name = "NAME|FILE")]
     pub tip: Option<String>,
-    /// Tip chord [mm] (default: the root chord).
+    /// Tip chord (mm) (default: the root chord).
     #[arg(long, value_name = "MM")]
     pub tip_chord: Option<f64>,
-    /// Tip twist [deg], positive nose up, about --twist-pivot.
+    /// Tip twist (deg), positive nose up, about --twist-pivot.
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub tip_twist: Option<f64>,
-    /// Tip leading-edge sweep [mm], positive swept back.
+    /// Tip leading-edge sweep (mm), positive swept back.
     #[arg(long, value_name = "MM", allow_hyphen_values = true)]
     pub tip_sweep: Option<f64>,
     /// Twist pivot as a fraction of the tip chord from its LE.
     #[arg(long, value_name = "F", default_value_t = 0.25)]
     pub twist_pivot: f64,
-    /// Panel span between the root and tip faces [mm].
+    /// Panel span between the root and tip faces (mm).
     #[arg(long, value_name = "MM")]
     pub span: Option<f64>,
     /// Machine profile: a name under config/machines (hotwire_xyuv, hotwire_xy) or a YAML file.
@@ -55,7 +55,7 @@ pub struct HotwireArgs {
     /// Target exposure CSE (default: the baseline's mean exposure).
     #[arg(long, value_name = "E")]
     pub cse: Option<f64>,
-    /// Cutting feed of the faster foam face [mm/s].
+    /// Cutting feed of the faster foam face (mm/s).
     #[arg(long, value_name = "MM_S")]
     pub feed: Option<f64>,
     /// Make the feed along the path a design variable too (0.5–1.5 × --feed, constant
@@ -66,7 +66,7 @@ pub struct HotwireArgs {
     /// 1.5 times the plan's CSE in 11 steps).
     #[arg(long, value_name = "CSE,…", value_delimiter = ',')]
     pub calibrate: Vec<f64>,
-    /// Chord [mm] measured on a test cut of the fixed-offset (baseline) path: reports the CSE
+    /// Chord (mm) measured on a test cut of the fixed-offset (baseline) path: reports the CSE
     /// it implies from the calibration table.
     #[arg(long, value_name = "MM")]
     pub test_cut_chord: Option<f64>,
@@ -94,11 +94,11 @@ pub struct Report {
     pub airfoil: String,
     /// The section's name from its file.
     pub airfoil_name: String,
-    /// Chord [mm].
+    /// Chord (mm).
     pub chord_mm: f64,
     /// Foam id.
     pub material: String,
-    /// Wire offset used [mm].
+    /// Wire offset used (mm).
     pub offset_mm: f64,
     /// Exposure target.
     pub cse: f64,
@@ -112,7 +112,7 @@ pub struct Report {
     pub final_loss: f64,
     /// Iterations run.
     pub iterations: usize,
-    /// Optimiser wall time [s].
+    /// Optimiser wall time (s).
     pub seconds: f64,
     /// RNG seed.
     pub seed: u64,
@@ -133,9 +133,9 @@ pub struct Report {
 pub struct TipReport {
     /// The section's name from its file.
     pub airfoil_name: String,
-    /// Chord [mm].
+    /// Chord (mm).
     pub chord_mm: f64,
-    /// Wire offset of its baseline [mm].
+    /// Wire offset of its baseline (mm).
     pub offset_mm: f64,
     /// Exposure target.
     pub cse: f64,

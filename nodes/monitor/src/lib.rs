@@ -19,7 +19,7 @@ pub struct MonitorParams {
     pub expect_toolpaths: u32,
     /// Exit 0 once this many heat maps arrived (with `expect_toolpaths`); 0: no requirement.
     pub expect_heat_maps: u32,
-    /// Give up (exit non-zero) after this long without meeting the expectations [s];
+    /// Give up (exit non-zero) after this long without meeting the expectations (s);
     /// 0: run until shutdown.
     pub timeout_s: f64,
 }

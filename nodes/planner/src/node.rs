@@ -42,18 +42,18 @@ pub struct PlannerParams {
     /// Machine profile used when a goal's `machine_profile` is empty: a name under
     /// `config/machines` or a path to a profile YAML (it gives the wire, supply and travel).
     pub machine_profile: String,
-    /// Panel span [mm] when a goal's `span_mm` is 0.
+    /// Panel span (mm) when a goal's `span_mm` is 0.
     pub span_mm: f64,
     /// Tip twist pivot as a fraction of the tip chord from its LE.
     pub twist_pivot_chord_fraction: f64,
-    /// Nominal wire current [A] (sets the default offset; constant current as a fallback).
+    /// Nominal wire current (A) (sets the default offset; constant current as a fallback).
     pub current_a: f64,
     /// Make the feed along the path a design variable (0.5–1.5 × `feed_mm_s`, constant
     /// current).
     pub optimise_feed: bool,
-    /// Cutting feed [mm/s].
+    /// Cutting feed (mm/s).
     pub feed_mm_s: f64,
-    /// Straight lead-in / lead-out length behind the trailing edge [mm].
+    /// Straight lead-in / lead-out length behind the trailing edge (mm).
     pub lead_in_mm: f64,
     /// Surface panels N of the exposure model.
     pub panels: usize,
@@ -61,14 +61,14 @@ pub struct PlannerParams {
     pub iterations: usize,
     /// PSO particles.
     pub particles: usize,
-    /// PSO restart period [iterations]; 0: never.
+    /// PSO restart period (iterations); 0: never.
     pub restart_every: usize,
     /// Send feedback every this many iterations (and after the last).
     pub feedback_every: usize,
-    /// Republish the latest exposure profile this often while planning [s]; 0: only at the
-    /// start and the end.
+    /// Publish the current best's exposure profile and matrix at most this often while
+    /// planning (s); 0: only the baselines and the end.
     pub exposure_period_s: f64,
-    /// How long to wait for a client to ask for a goal's result [s].
+    /// How long to wait for a client to ask for a goal's result (s).
     pub result_timeout_s: f64,
 }
 

@@ -21,29 +21,29 @@ use serde::{Deserialize, Serialize};
 pub struct ProbeParams {
     /// Job id stamped on the toolpath.
     pub job_id: String,
-    /// Test block size in the root plane [mm].
+    /// Test block size in the root plane (mm).
     pub block_width_mm: f64,
-    /// Test block height in the root plane [mm].
+    /// Test block height in the root plane (mm).
     pub block_height_mm: f64,
     /// Tip block size as a fraction of the root (taper).
     pub tip_scale: f64,
-    /// Distance between root and tip planes [mm].
+    /// Distance between root and tip planes (mm).
     pub plane_separation_mm: f64,
-    /// Cutting feed [mm/s].
+    /// Cutting feed (mm/s).
     pub feed_mm_s: f64,
-    /// Wire current while cutting [A].
+    /// Wire current while cutting (A).
     pub wire_current_a: f64,
-    /// Heat-map raster size [cells].
+    /// Heat-map raster size (cells).
     pub heat_map_width: u32,
-    /// Heat-map raster size [cells].
+    /// Heat-map raster size (cells).
     pub heat_map_height: u32,
     /// Heat-map frames to publish (0: none).
     pub heat_map_frames: u32,
-    /// Heat-map frame rate [Hz].
+    /// Heat-map frame rate (Hz).
     pub heat_map_rate_hz: f64,
     /// Subscribers to wait for on each topic before publishing (0: publish at once).
     pub wait_for_subscribers: u32,
-    /// How long to wait for them [s].
+    /// How long to wait for them (s).
     pub wait_timeout_s: f64,
     /// After publishing, keep running until shutdown so late joiners get the toolpath.
     pub linger: bool,
