@@ -297,7 +297,7 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     };
     let cse_values = if a.calibrate.is_empty() {
         (0..=10)
-            .map(|k| plan.cse * (0.5 + 0.1 * k as f64))
+            .map(|k| plan.root.cse * (0.5 + 0.1 * k as f64))
             .collect()
     } else {
         a.calibrate.clone()
@@ -324,15 +324,15 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     }
     let report = Report {
         airfoil: a.airfoil.clone(),
-        airfoil_name: plan.airfoil.clone(),
+        airfoil_name: plan.root.airfoil.clone(),
         chord_mm: job.chord_mm,
         material: job.material.clone(),
-        offset_mm: plan.offset_mm,
-        cse: plan.cse,
-        baseline: plan.baseline_stats,
-        optimised: plan.optimised_stats,
-        baseline_loss: plan.baseline_loss,
-        final_loss: plan.final_loss,
+        offset_mm: plan.root.offset_mm,
+        cse: plan.root.cse,
+        baseline: plan.root.baseline_stats,
+        optimised: plan.root.optimised_stats,
+        baseline_loss: plan.root.baseline_loss,
+        final_loss: plan.root.final_loss,
         iterations: plan.iterations,
         seconds: plan.seconds,
         seed: plan.seed,
@@ -377,12 +377,12 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     println!(
         "cell hotwire: {} at {} mm: RMS {:.4} -> {:.4}, CV {:.4} -> {:.4}{tip} ({} iterations, \
          {:.1} s, machine {}); wrote {}",
-        plan.airfoil,
+        plan.root.airfoil,
         job.chord_mm,
-        plan.baseline_stats.rms,
-        plan.optimised_stats.rms,
-        plan.baseline_stats.cv,
-        plan.optimised_stats.cv,
+        plan.root.baseline_stats.rms,
+        plan.root.optimised_stats.rms,
+        plan.root.baseline_stats.cv,
+        plan.root.optimised_stats.cv,
         plan.iterations,
         plan.seconds,
         plan.machine,

@@ -161,6 +161,7 @@ fn main() {
             };
             let offset = plan(&quick, |_| ControlFlow::Continue(()))
                 .unwrap()
+                .root
                 .offset_mm;
             breakdown(n, offset);
         }
@@ -176,15 +177,15 @@ fn main() {
             p.iterations,
             job.pso.particles,
             p.seconds,
-            p.baseline_loss,
-            p.final_loss,
-            100.0 * (1.0 - p.final_loss / p.baseline_loss),
-            p.baseline_stats.rms,
-            p.optimised_stats.rms,
-            p.baseline_stats.max_abs,
-            p.optimised_stats.max_abs,
-            p.baseline_stats.cv,
-            p.optimised_stats.cv,
+            p.root.baseline_loss,
+            p.root.final_loss,
+            100.0 * (1.0 - p.root.final_loss / p.root.baseline_loss),
+            p.root.baseline_stats.rms,
+            p.root.optimised_stats.rms,
+            p.root.baseline_stats.max_abs,
+            p.root.optimised_stats.max_abs,
+            p.root.baseline_stats.cv,
+            p.root.optimised_stats.cv,
         );
         rows.push((n, p));
     }
@@ -194,16 +195,16 @@ fn main() {
         for (n, p) in rows {
             println!(
                 "| {n} | {} | {} | {:.2} | {:.0} | {:.4e} | {:.4e} | {:.4} → {:.4} | {:.4} → {:.4} |",
-                p.optimised.len(),
+                p.root.optimised.len(),
                 p.iterations,
                 p.seconds,
                 p.iterations as f64 / p.seconds,
-                p.baseline_loss,
-                p.final_loss,
-                p.baseline_stats.rms,
-                p.optimised_stats.rms,
-                p.baseline_stats.max_abs,
-                p.optimised_stats.max_abs
+                p.root.baseline_loss,
+                p.root.final_loss,
+                p.root.baseline_stats.rms,
+                p.root.optimised_stats.rms,
+                p.root.baseline_stats.max_abs,
+                p.root.optimised_stats.max_abs
             );
         }
     }

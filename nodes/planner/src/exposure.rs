@@ -794,21 +794,37 @@ fn cut_point(w: &WireSegments, sx: f64, sy: f64, u: f64) -> (f64, usize) {
     let hi = (u + CAUSAL_WINDOW).min(1.0) * w.total;
     let (mut best, mut best_s, mut best_j) = (f64::INFINITY, lo, 0);
     for j in 0..w.len() {
-        let (s0, l) = (w.s0[j], w.len[j]);
-        let (p, q) = ((lo - s0).max(0.0), (hi - s0).min(l));
-        if p > q {
-            continue;
-        }
-        let (rx, ry) = (w.ax[j] - sx, w.ay[j] - sy);
-        let x0 = rx * w.wx[j] + ry * w.wy[j];
-        let sigma = (-x0).clamp(p, q);
-        let (dx, dy) = (rx + sigma * w.wx[j], ry + sigma * w.wy[j]);
-        let d2 = dx * dx + dy * dy;
-        if d2 < best {
-            (best, best_s, best_j) = (d2, s0 + sigma, j);
+        if let Some((d2, s)) = nearest_in_window(w, j, sx, sy, lo, hi) {
+            if d2 < best {
+                (best, best_s, best_j) = (d2, s, j);
+            }
         }
     }
     (best_s, best_j)
+}
+
+/// The point of wire segment `j` inside the arc window [`lo`, `hi`] (mm) nearest to (sx, sy):
+/// (squared distance, its arc position in mm), or `None` if the segment lies outside the
+/// window.
+#[inline(always)]
+fn nearest_in_window(
+    w: &WireSegments,
+    j: usize,
+    sx: f64,
+    sy: f64,
+    lo: f64,
+    hi: f64,
+) -> Option<(f64, f64)> {
+    let (s0, l) = (w.s0[j], w.len[j]);
+    let (p, q) = ((lo - s0).max(0.0), (hi - s0).min(l));
+    if p > q {
+        return None;
+    }
+    let (rx, ry) = (w.ax[j] - sx, w.ay[j] - sy);
+    let x0 = rx * w.wx[j] + ry * w.wy[j];
+    let sigma = (-x0).clamp(p, q);
+    let (dx, dy) = (rx + sigma * w.wx[j], ry + sigma * w.wy[j]);
+    Some((dx * dx + dy * dy, s0 + sigma))
 }
 
 /// asinh(x₁/d) − asinh(x₀/d) = ∫_{x₀}^{x₁} dx/√(x² + d²), for x₀ ≤ x₁, d > 0, without the

@@ -377,40 +377,14 @@ impl Motion {
     }
 }
 
-/// A planned hot-wire cut (see the module docs). The root section's results are the flat
-/// fields (`airfoil` … `loss_history`); the tip's, on a tapered panel, are in `tip`.
+/// A planned hot-wire cut (see the module docs): the root section's plan, the tip's on a
+/// tapered panel, and the carriage moves.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HotwirePlan {
-    /// Root section name (from the `.dat` name line).
-    pub airfoil: String,
-    /// The scaled root foil (LE at the origin, TE at (chord, 0)), Selig order.
-    pub foil: Vec<Point2<f64>>,
-    /// The resampled root foil whose panels the exposure is evaluated on (N + 1 points).
-    pub surface: Vec<Point2<f64>>,
-    /// The root fixed-offset baseline path (closed).
-    pub baseline: Vec<Point2<f64>>,
-    /// The root path the wire follows (closed).
-    pub optimised: Vec<Point2<f64>>,
+    /// The root section (the only one on a straight cut).
+    pub root: SectionPlan,
     /// Exposure model used (for [`HotwirePlan::exposure_matrix_heat_map`]).
     pub model: ExposureModel,
-    /// The root exposure target CSE.
-    pub cse: f64,
-    /// Root baseline exposure per panel.
-    pub baseline_exposure: Vec<f64>,
-    /// Root optimised exposure per panel.
-    pub optimised_exposure: Vec<f64>,
-    /// Root baseline uniformity.
-    pub baseline_stats: ExposureStats,
-    /// Root optimised uniformity.
-    pub optimised_stats: ExposureStats,
-    /// Loss of the root baseline.
-    pub baseline_loss: f64,
-    /// Loss of the optimised root path.
-    pub final_loss: f64,
-    /// Root (iteration, best loss) at iteration 0 and at every improvement.
-    pub loss_history: Vec<(usize, f64)>,
-    /// Root wire-centre offset of the baseline (mm).
-    pub offset_mm: f64,
     /// The tip section on a tapered panel.
     pub tip: Option<SectionPlan>,
     /// Iterations run (both sections together on a tapered panel).
@@ -911,21 +885,8 @@ pub fn plan_observed(
         t.optimised = tip_cut;
     }
     Ok(HotwirePlan {
-        airfoil: root.airfoil,
-        foil: root.foil,
-        surface: root.surface,
-        baseline: root.baseline,
-        optimised: root.optimised,
+        root,
         model: job.objective.model,
-        cse: root.cse,
-        baseline_exposure: root.baseline_exposure,
-        optimised_exposure: root.optimised_exposure,
-        baseline_stats: root.baseline_stats,
-        optimised_stats: root.optimised_stats,
-        baseline_loss: root.baseline_loss,
-        final_loss: root.final_loss,
-        loss_history: root.loss_history,
-        offset_mm: root.offset_mm,
         tip: tip_plan,
         iterations,
         seconds,
@@ -1221,7 +1182,7 @@ impl HotwirePlan {
     /// True if the root path (and the tip path, on a tapered panel) keeps `min_clearance_mm`
     /// from its foil (T ∩ G = ∅).
     pub fn is_feasible(&self, min_clearance_mm: f64) -> bool {
-        is_feasible(&self.optimised, &self.foil, min_clearance_mm)
+        is_feasible(&self.root.optimised, &self.root.foil, min_clearance_mm)
             && self
                 .tip
                 .as_ref()
@@ -1245,20 +1206,16 @@ impl HotwirePlan {
             }
             out
         };
-        let root_chord = self
-            .foil
-            .iter()
-            .map(|p| p.x)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let root_chord = self.root.chord_mm;
         let zr = self.towers.root_plane_mm;
         let mut out = vec![
             (
                 "root_foil",
-                place(&self.foil, root_chord, &Placement::ROOT, zr),
+                place(&self.root.foil, root_chord, &Placement::ROOT, zr),
             ),
             (
                 "root_path",
-                place(&self.optimised, root_chord, &Placement::ROOT, zr),
+                place(&self.root.optimised, root_chord, &Placement::ROOT, zr),
             ),
         ];
         if let Some(t) = &self.tip {
@@ -1337,32 +1294,30 @@ impl HotwirePlan {
         wire_radius_mm: f64,
     ) -> Result<Vec<CalibrationRow>, JobError> {
         let wrap = |e: crate::exposure::ExposureError| JobError::Plan {
-            airfoil: self.airfoil.clone(),
+            airfoil: self.root.airfoil.clone(),
             source: e.into(),
         };
         let sweep = Sweep {
             wire_radius_mm,
             ..Sweep::default()
         };
-        let chord = self
-            .foil
-            .iter()
-            .map(|p| p.x)
-            .fold(f64::NEG_INFINITY, f64::max)
-            - self.foil.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+        let chord = self.root.chord_mm;
         let predict = |path: &[Point2<f64>]| {
             predict_chords(
                 &self.model,
-                &self.surface,
+                &self.root.surface,
                 path,
-                self.offset_mm,
+                self.root.offset_mm,
                 chord,
                 cse_values,
                 &sweep,
             )
             .map_err(wrap)
         };
-        let (baseline, optimised) = (predict(&self.baseline)?, predict(&self.optimised)?);
+        let (baseline, optimised) = (
+            predict(&self.root.baseline)?,
+            predict(&self.root.optimised)?,
+        );
         Ok(baseline
             .into_iter()
             .zip(optimised)
@@ -1377,12 +1332,12 @@ impl HotwirePlan {
     /// The optimised exposure along the foil as a 1 × N raster (`exposure_profile`, one cell
     /// per panel from the TE, index space), threshold = CSE.
     pub fn exposure_heat_map(&self) -> HeatMap {
-        profile_map(self.model, self.cse, &self.optimised_exposure)
+        profile_map(self.model, self.root.cse, &self.root.optimised_exposure)
     }
 
     /// The baseline exposure profile, as [`HotwirePlan::exposure_heat_map`].
     pub fn baseline_heat_map(&self) -> HeatMap {
-        profile_map(self.model, self.cse, &self.baseline_exposure)
+        profile_map(self.model, self.root.cse, &self.root.baseline_exposure)
     }
 
     /// Every optimised wire segment's contribution to every panel: M × N (`wire_exposure`,
@@ -1392,17 +1347,17 @@ impl HotwirePlan {
     /// The exposure model's (a degenerate path); not expected for a plan from [`plan`].
     pub fn exposure_matrix_heat_map(&self) -> Result<HeatMap, JobError> {
         let wrap = |e: crate::exposure::ExposureError| JobError::Plan {
-            airfoil: self.airfoil.clone(),
+            airfoil: self.root.airfoil.clone(),
             source: e.into(),
         };
-        let panels = Panels::from_points(&self.surface).map_err(wrap)?;
+        let panels = Panels::from_points(&self.root.surface).map_err(wrap)?;
         let (rows, cols, values) = self
             .model
-            .exposure_matrix(&panels, &self.optimised)
+            .exposure_matrix(&panels, &self.root.optimised)
             .map_err(wrap)?;
         Ok(heat_map(
             self.model,
-            self.cse,
+            self.root.cse,
             "wire_exposure",
             cols,
             rows,
@@ -1496,11 +1451,11 @@ mod tests {
         .unwrap();
         assert_eq!(calls, 60);
         assert_eq!(a.iterations, 60);
-        assert!(a.final_loss <= a.baseline_loss, "{a:?}");
-        assert!(a.optimised_stats.rms <= a.baseline_stats.rms + 1e-12);
+        assert!(a.root.final_loss <= a.root.baseline_loss, "{a:?}");
+        assert!(a.root.optimised_stats.rms <= a.root.baseline_stats.rms + 1e-12);
         assert!(a.is_feasible(Objective::default().min_clearance_mm));
-        assert_eq!(a.optimised_exposure.len(), 40);
-        assert_eq!(a.cut.len(), a.optimised.len());
+        assert_eq!(a.root.optimised_exposure.len(), 40);
+        assert_eq!(a.cut.len(), a.root.optimised.len());
         assert_eq!(a.cut.feed_mm_s.len(), a.cut.len());
         assert_eq!(a.cut.current_a.len(), a.cut.len());
         assert!(a.notes.is_empty(), "{:?}", a.notes);
@@ -1519,13 +1474,13 @@ mod tests {
             .cut
             .xy
             .iter()
-            .zip(&a.optimised)
+            .zip(&a.root.optimised)
             .all(|(m, p)| (m - (p + origin)).norm() < 1e-9));
 
         let b = plan(&small(3), |_| ControlFlow::Continue(())).unwrap();
         assert_eq!(
-            (&a.optimised, a.final_loss, &a.cut),
-            (&b.optimised, b.final_loss, &b.cut)
+            (&a.root.optimised, a.root.final_loss, &a.cut),
+            (&b.root.optimised, b.root.final_loss, &b.cut)
         );
 
         let tp = a.to_toolpath("t");
@@ -1542,7 +1497,7 @@ mod tests {
         let m = a.exposure_matrix_heat_map().unwrap();
         assert_eq!(m.width, 40);
         assert_eq!(m.data.len(), (m.width * m.height) as usize);
-        assert_eq!(m.height as usize, a.optimised.len() - 1);
+        assert_eq!(m.height as usize, a.root.optimised.len() - 1);
     }
 
     fn tapered(seed: u64) -> HotwireJob {
@@ -1577,13 +1532,13 @@ mod tests {
         assert!(p.is_feasible(Objective::default().min_clearance_mm));
         // The slower (tip) face gets the wider kerf: offset × perimeter ratio.
         assert!(
-            tip.offset_mm > p.offset_mm * 1.5,
+            tip.offset_mm > p.root.offset_mm * 1.5,
             "{} {}",
             tip.offset_mm,
-            p.offset_mm
+            p.root.offset_mm
         );
         assert!(tip.optimised_stats.rms.is_finite());
-        assert_eq!(tip.optimised.len(), p.optimised.len());
+        assert_eq!(tip.optimised.len(), p.root.optimised.len());
 
         // Rebuild each wire line from the carriages and check it passes the placed root and
         // tip points on the two faces.
@@ -1592,7 +1547,7 @@ mod tests {
         for k in (0..p.cut.len()).step_by(7) {
             let (xy, uv) = (p.cut.xy[k], p.cut.uv[k]);
             let at = |z: f64| xy + (uv - xy) * (z / w);
-            assert!((at(zr) - (p.optimised[k] + origin)).norm() < 1e-9);
+            assert!((at(zr) - (p.root.optimised[k] + origin)).norm() < 1e-9);
             let t = job
                 .tip
                 .as_ref()
@@ -1605,7 +1560,7 @@ mod tests {
         // Every move: the faster face at the feed (or slower when a carriage hits the limit),
         // the carriage feed within the machine limit, the current from the face speed.
         for k in 1..p.cut.len() {
-            let dr = (p.optimised[k] - p.optimised[k - 1]).norm();
+            let dr = (p.root.optimised[k] - p.root.optimised[k - 1]).norm();
             let dt = (tip.optimised[k] - tip.optimised[k - 1]).norm();
             let dxy = (p.cut.xy[k] - p.cut.xy[k - 1]).norm();
             let duv = (p.cut.uv[k] - p.cut.uv[k - 1]).norm();
@@ -1741,15 +1696,20 @@ mod tests {
             p.cut.current_a.iter().all(|&a| a == 3.0),
             "constant current"
         );
-        assert!(p.final_loss < p.baseline_loss);
+        assert!(p.root.final_loss < p.root.baseline_loss);
         // The reported exposure is the feed-weighted one the loss saw.
         let fit = p
+            .root
             .optimised_exposure
             .iter()
-            .map(|e| (e - p.cse).powi(2))
+            .map(|e| (e - p.root.cse).powi(2))
             .sum::<f64>()
-            / p.optimised_exposure.len() as f64;
-        assert!(fit <= p.final_loss + 1e-12, "{fit} vs {}", p.final_loss);
+            / p.root.optimised_exposure.len() as f64;
+        assert!(
+            fit <= p.root.final_loss + 1e-12,
+            "{fit} vs {}",
+            p.root.final_loss
+        );
     }
 
     /// The quality bar, with the paper's default law (1/‖R‖): on three real sections the
@@ -1773,7 +1733,7 @@ mod tests {
                 ..HotwireJob::default()
             };
             let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
-            let (b, o) = (p.baseline_stats, p.optimised_stats);
+            let (b, o) = (p.root.baseline_stats, p.root.optimised_stats);
             eprintln!(
                 "{name}: RMS {:.4} -> {:.4} ({:.0} %), max {:.4} -> {:.4}, CV {:.4} -> {:.4}",
                 b.rms,
@@ -1822,7 +1782,7 @@ mod tests {
             ..HotwireJob::default()
         };
         let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
-        assert_eq!(p.offset_mm, FALLBACK_OFFSET_MM);
+        assert_eq!(p.root.offset_mm, FALLBACK_OFFSET_MM);
         assert!(p.cut.current_a.iter().all(|&a| a == 3.0));
         assert!(p.notes[0].contains("EPP"), "{:?}", p.notes);
     }

@@ -194,12 +194,12 @@ fn summary(job_id: &str, job: &HotwireJob, plan: &HotwirePlan) -> String {
     let mut msg = format!(
         "planned {job_id}: {} at {} mm, loss {:.4e} -> {:.4e}, RMS {:.4} -> {:.4} \
          ({} iterations, {:.1} s, seed {})",
-        plan.airfoil,
+        plan.root.airfoil,
         job.chord_mm,
-        plan.baseline_loss,
-        plan.final_loss,
-        plan.baseline_stats.rms,
-        plan.optimised_stats.rms,
+        plan.root.baseline_loss,
+        plan.root.final_loss,
+        plan.root.baseline_stats.rms,
+        plan.root.optimised_stats.rms,
         plan.iterations,
         plan.seconds,
         plan.seed
@@ -234,7 +234,7 @@ fn log_to_rerun(node: &CellNode, plan: &HotwirePlan, toolpath: &Toolpath, profil
                 tracing::warn!("rerun: {e}");
             }
         }
-        for &(it, loss) in &plan.loss_history {
+        for &(it, loss) in &plan.root.loss_history {
             rec.set_time_sequence("iteration", it as i64);
             if let Err(e) = rec.log("/hotwire/loss", &rerun::Scalars::single(loss)) {
                 tracing::warn!("rerun: {e}");
@@ -248,7 +248,7 @@ fn log_to_rerun(node: &CellNode, plan: &HotwirePlan, toolpath: &Toolpath, profil
         "/hotwire/log",
         &format!(
             "{} loss {:.4e} -> {:.4e}",
-            toolpath.job_id, plan.baseline_loss, plan.final_loss
+            toolpath.job_id, plan.root.baseline_loss, plan.root.final_loss
         ),
     );
 }
@@ -453,8 +453,8 @@ pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
                         success: true,
                         message,
                         toolpath,
-                        final_loss: plan.final_loss,
-                        baseline_loss: plan.baseline_loss,
+                        final_loss: plan.root.final_loss,
+                        baseline_loss: plan.root.baseline_loss,
                     },
                 )
             }

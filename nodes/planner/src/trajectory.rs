@@ -263,6 +263,12 @@ impl Trajectory {
     }
 }
 
+/// True if segment c–d lies wholly outside the box [x_lo, x_hi] × [y_lo, y_hi].
+#[inline(always)]
+fn outside_box(c: Point2<f64>, d: Point2<f64>, [x_lo, x_hi, y_lo, y_hi]: [f64; 4]) -> bool {
+    c.x.max(d.x) < x_lo || c.x.min(d.x) > x_hi || c.y.max(d.y) < y_lo || c.y.min(d.y) > y_hi
+}
+
 /// Smallest distance between the polyline `path` (open, or closed by repeating its first point)
 /// and the closed polygon `outline` (closing segment implied), or 0 when they intersect or the
 /// path lies inside the outline. Segment–segment distances, not just vertices.
@@ -284,11 +290,7 @@ pub fn clearance_mm(path: &[Point2<f64>], outline: &[Point2<f64>], limit_mm: f64
         let (lo_y, hi_y) = (a.y.min(b.y) - best, a.y.max(b.y) + best);
         for i in 0..n {
             let (c, d) = (outline[i], outline[(i + 1) % n]);
-            if c.x.max(d.x) < lo_x
-                || c.x.min(d.x) > hi_x
-                || c.y.max(d.y) < lo_y
-                || c.y.min(d.y) > hi_y
-            {
+            if outside_box(c, d, [lo_x, hi_x, lo_y, hi_y]) {
                 continue;
             }
             let dist = segment_distance(a, b, c, d);
@@ -448,11 +450,7 @@ impl OutlineGrid {
                 for &i in items {
                     let i = i as usize;
                     let (c, d) = (outline[i], outline[(i + 1) % n]);
-                    if c.x.max(d.x) < lo_x
-                        || c.x.min(d.x) > hi_x
-                        || c.y.max(d.y) < lo_y
-                        || c.y.min(d.y) > hi_y
-                    {
+                    if outside_box(c, d, [lo_x, hi_x, lo_y, hi_y]) {
                         continue;
                     }
                     // Most candidates are clearly further than `best`: a test without

@@ -559,16 +559,9 @@ fn scan_block(w: &WireSegments, b: usize, win: &Window, best: &mut (f64, f64, us
         }
     } else {
         for j in start.max(win.j0)..(start + BLOCK).min(win.j1) {
-            let (s0, l) = (w.s0[j], w.len[j]);
-            let (p, q) = ((lo - s0).max(0.0), (hi - s0).min(l));
-            if p > q {
-                continue;
+            if let Some((d2, s)) = super::nearest_in_window(w, j, sx, sy, lo, hi) {
+                offer(best, d2, s, j);
             }
-            let (rx, ry) = (w.ax[j] - sx, w.ay[j] - sy);
-            let x0 = rx * w.wx[j] + ry * w.wy[j];
-            let sigma = (-x0).clamp(p, q);
-            let (dx, dy) = (rx + sigma * w.wx[j], ry + sigma * w.wy[j]);
-            offer(best, dx * dx + dy * dy, s0 + sigma, j);
         }
     }
 }
