@@ -121,6 +121,93 @@ pub struct MachineProfile {
     /// Hot-wire geometry; required when `process` is `hotwire`.
     #[serde(default)]
     pub hotwire: Option<HotwireGeometry>,
+    /// How the emitter writes G-code for this machine; absent: the machine takes no G-code.
+    #[serde(default)]
+    pub gcode: Option<GcodeSettings>,
+}
+
+/// A G-code dialect: what the controller accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Dialect {
+    /// GRBL 1.1 (and FluidNC, grblHAL).
+    Grbl,
+    /// LinuxCNC's RS274NGC.
+    Linuxcnc,
+    /// Mach3.
+    Mach3,
+    /// Marlin (extrusion printers).
+    Marlin,
+}
+
+/// How feeds are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeedMode {
+    /// G94: F in mm/min along the path.
+    UnitsPerMinute,
+    /// G93: F = 1 / (move duration in minutes), so 4-axis carriages arrive together.
+    InverseTime,
+}
+
+/// Which axis letter each toolpath coordinate is written as.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisWords {
+    /// Primary point x (e.g. `X`).
+    pub x: char,
+    /// Primary point y (e.g. `Y`).
+    pub y: char,
+    /// Primary point z; absent on a 2-axis or 4-axis hot-wire machine.
+    #[serde(default)]
+    pub z: Option<char>,
+    /// Secondary (UV carriage) x: `U` on LinuxCNC, often `Z` on a GRBL 4-axis board.
+    #[serde(default)]
+    pub u: Option<char>,
+    /// Secondary y: `V`, or `A` on a GRBL 4-axis board.
+    #[serde(default)]
+    pub v: Option<char>,
+}
+
+/// The words that switch the process power (wire heat, laser, spindle).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PowerWords {
+    /// The word that turns power on, e.g. `M3`; the S value follows it.
+    pub on: String,
+    /// The word that turns power off, e.g. `M5`.
+    pub off: String,
+    /// S value per unit of the toolpath's power (e.g. 100 for S in centiamps).
+    pub s_per_unit: f64,
+    /// Decimal places of S.
+    #[serde(default)]
+    pub s_decimals: usize,
+}
+
+/// G-code output settings (the emitter's part of a profile).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GcodeSettings {
+    /// The controller's dialect.
+    pub dialect: Dialect,
+    /// Axis letters.
+    pub axis_words: AxisWords,
+    /// Decimal places of coordinates.
+    pub decimals: usize,
+    /// Feed mode.
+    pub feed_mode: FeedMode,
+    /// Lines before the first move (units, plane, absolute mode…).
+    #[serde(default)]
+    pub program_start: Vec<String>,
+    /// Lines after the last move (before the program end word).
+    #[serde(default)]
+    pub program_end: Vec<String>,
+    /// Power words; absent: the program switches no power.
+    #[serde(default)]
+    pub power: Option<PowerWords>,
+    /// Dwell after switching power on, before the first move, s (wire pre-heat).
+    #[serde(default)]
+    pub preheat_dwell_s: f64,
 }
 
 /// A position outside a machine's travel.
@@ -194,10 +281,11 @@ impl MachineProfile {
         Ok(profile)
     }
 
-    /// Checks the values: axis letters A–Z with finite min < max, a positive feed limit, and
-    /// for a hot-wire machine a `hotwire` section with axes X and Y (plus both or neither of
-    /// U and V), a positive tower separation, the root face between the towers and a supply
-    /// range 0 ≤ min ≤ max.
+    /// Checks the values: axis letters A–Z with finite min < max, a positive feed limit; for a
+    /// hot-wire machine a `hotwire` section with axes X and Y (plus both or neither of U and
+    /// V), a positive tower separation, the root face between the towers and a supply range
+    /// 0 ≤ min ≤ max; for G-code, axis words that are machine axes (u and v together), at most
+    /// 6 decimals, a non-negative pre-heat dwell and a positive S scale.
     ///
     /// # Errors
     /// [`ProfileError::Invalid`] naming `source_name` and the field.
@@ -286,6 +374,51 @@ impl MachineProfile {
                     "hotwire.supply_a",
                     format!("[{lo}, {hi}] must satisfy 0 <= min <= max, max > 0"),
                 ));
+            }
+        }
+        if let Some(g) = &self.gcode {
+            let w = &g.axis_words;
+            for (field, letter) in [
+                ("x", Some(w.x)),
+                ("y", Some(w.y)),
+                ("z", w.z),
+                ("u", w.u),
+                ("v", w.v),
+            ] {
+                if let Some(l) = letter {
+                    if !self.axes.contains_key(&l) {
+                        return Err(invalid(
+                            &format!("gcode.axis_words.{field}"),
+                            format!("axis {l} is not one of the machine's axes"),
+                        ));
+                    }
+                }
+            }
+            if w.u.is_some() != w.v.is_some() {
+                return Err(invalid(
+                    "gcode.axis_words",
+                    "u and v come together (the second carriage)".into(),
+                ));
+            }
+            if g.decimals > 6 {
+                return Err(invalid(
+                    "gcode.decimals",
+                    format!("{} is more than 6", g.decimals),
+                ));
+            }
+            if !(g.preheat_dwell_s.is_finite() && g.preheat_dwell_s >= 0.0) {
+                return Err(invalid(
+                    "gcode.preheat_dwell_s",
+                    format!("{} must be finite and >= 0", g.preheat_dwell_s),
+                ));
+            }
+            if let Some(p) = &g.power {
+                if !(p.s_per_unit.is_finite() && p.s_per_unit > 0.0) {
+                    return Err(invalid(
+                        "gcode.power.s_per_unit",
+                        format!("{} must be finite and > 0", p.s_per_unit),
+                    ));
+                }
             }
         }
         Ok(())
@@ -390,6 +523,25 @@ mod tests {
         let text = base().replace("process: hotwire", "process: waam");
         let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
         assert!(e.to_string().contains("hotwire"), "{e}");
+    }
+
+    #[test]
+    fn gcode_sections_are_checked_against_the_axes() {
+        let p = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        let g = p.gcode.as_ref().unwrap();
+        assert_eq!(
+            (g.dialect, g.feed_mode),
+            (Dialect::Linuxcnc, FeedMode::InverseTime)
+        );
+        let text = base().replace("u: U, v: V", "u: W, v: V");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        assert!(e.to_string().contains("gcode.axis_words.u: axis W"), "{e}");
+        let text = base().replace("u: U, v: V", "u: U");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        assert!(e.to_string().contains("gcode.axis_words:"), "{e}");
+        let text = base().replace("feed_mode: inverse_time", "feed_mode: inverse");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        assert!(e.to_string().contains("feed_mode"), "{e}");
     }
 
     #[test]

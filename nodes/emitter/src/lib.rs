@@ -1,0 +1,86 @@
+//! `cell_emitter`: turns a `Toolpath` into a `MachineProgram` for a machine profile.
+//!
+//! - [`gcode`]: G-code for the profile's dialect (`cell_profiles::GcodeSettings`): axis words,
+//!   decimals, G94 or G93 inverse-time feeds, power words, pre-heat dwell, start and end lines.
+//! - [`program`]: the `MachineProgram` message (files, line count, SHA-256) and atomic file
+//!   output.
+//!
+//! Pure and synchronous: it knows nothing of ROS. Every input is checked first, so a bad
+//! toolpath gives an error naming the segment and point and never a partial program.
+
+#![warn(missing_docs)]
+
+pub mod gcode;
+pub mod program;
+
+/// A toolpath or profile the emitter cannot turn into a program. One line, naming the segment
+/// and point (0-based) where it applies.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EmitError {
+    /// The profile has no section for the requested output.
+    #[error("machine profile {profile:?} has no {section} section")]
+    MissingSection {
+        /// Profile name.
+        profile: String,
+        /// The section, e.g. `gcode`.
+        section: &'static str,
+    },
+    /// A coordinate, feed or power that is NaN or infinite.
+    #[error("segment {segment} point {point}: {what} is not finite")]
+    NonFinite {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// Which value.
+        what: &'static str,
+    },
+    /// A feed that is not > 0 on a move that goes somewhere.
+    #[error("segment {segment} point {point}: feed {feed_mm_s} mm/s must be > 0")]
+    Feed {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// The feed given.
+        feed_mm_s: f32,
+    },
+    /// Per-point arrays of a segment with the wrong length.
+    #[error("segment {segment}: {what} has {found} entries, the segment has {expected} points")]
+    Length {
+        /// Segment index.
+        segment: usize,
+        /// Which array.
+        what: &'static str,
+        /// Points in the segment.
+        expected: usize,
+        /// Entries given.
+        found: usize,
+    },
+    /// The toolpath needs an axis the profile does not map (e.g. UV points on an XY machine).
+    #[error("machine profile {profile:?} has no axis for {what}")]
+    NoAxis {
+        /// Profile name.
+        profile: String,
+        /// What needed the axis.
+        what: &'static str,
+    },
+    /// A position outside the machine's travel.
+    #[error("segment {segment} point {point}: {violation}")]
+    Envelope {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// Which axis and value.
+        violation: cell_profiles::EnvelopeViolation,
+    },
+    /// Writing the output failed.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The I/O error.
+        message: String,
+    },
+}
