@@ -111,7 +111,11 @@ fn check_against_toolpath(tp: &Toolpath, json: &Value, four_axis: bool) {
         // up to the coordinates' rounding to 0.001 mm (which matters on the shortest moves).
         let d = m["duration_s"].as_f64().unwrap();
         let tolerance = 2e-3 * e[4] + 0.0015 / e[5];
-        assert!((d - e[4]).abs() <= tolerance, "move {k}: {d} s vs {} s", e[4]);
+        assert!(
+            (d - e[4]).abs() <= tolerance,
+            "move {k}: {d} s vs {} s",
+            e[4]
+        );
     }
 }
 
