@@ -10,10 +10,9 @@ use std::{fmt::Write as _, ops::ControlFlow, path::PathBuf, process::ExitCode};
 
 use cell_planner::{
     calibration,
-    job::{self, AirfoilSource, ExposureStats, HotwireJob, HotwirePlan, TipSection},
+    job::{self, AirfoilSource, ExposureStats, HotwireJob, HotwirePlan, TipRequest, TipSection},
     kerf::MaterialLibrary,
     pso::PsoConfig,
-    wing::Placement,
 };
 use cell_profiles::MachineProfile;
 use clap::Args;
@@ -158,20 +157,13 @@ pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
     let defaults = HotwireJob::default();
     let machine = MachineProfile::resolve(&a.machine).map_err(|e| format!("--machine: {e}"))?;
     let root_airfoil = AirfoilSource::parse(&a.airfoil);
-    let tapered =
-        a.tip.is_some() || a.tip_chord.is_some() || a.tip_twist.is_some() || a.tip_sweep.is_some();
-    let tip = tapered.then(|| TipSection {
-        airfoil: a
-            .tip
-            .as_deref()
-            .map_or_else(|| root_airfoil.clone(), AirfoilSource::parse),
-        chord_mm: a.tip_chord.unwrap_or(a.chord),
-        placement: Placement {
-            sweep_mm: a.tip_sweep.unwrap_or(0.0),
-            twist_deg: a.tip_twist.unwrap_or(0.0),
-            pivot_chord_fraction: a.twist_pivot,
-        },
-    });
+    let request = TipRequest {
+        airfoil: a.tip.as_deref(),
+        chord_mm: a.tip_chord,
+        twist_deg: a.tip_twist,
+        sweep_mm: a.tip_sweep,
+    };
+    let tip = TipSection::requested(&request, &root_airfoil, a.chord, a.twist_pivot);
     Ok(HotwireJob {
         root_airfoil,
         chord_mm: a.chord,

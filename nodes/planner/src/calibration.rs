@@ -82,22 +82,6 @@ fn panel_normals(points: &[Point2<f64>]) -> Vec<Vector2<f64>> {
         .collect()
 }
 
-/// Outward unit normal at each vertex (bisector of the adjacent panel normals).
-fn vertex_normals(points: &[Point2<f64>]) -> Vec<Vector2<f64>> {
-    let panel = panel_normals(points);
-    let n = points.len();
-    (0..n)
-        .map(|i| {
-            let s = panel[(i + n - 1) % n] + panel[i];
-            if s.norm() > 1e-12 {
-                s.normalize()
-            } else {
-                panel[i]
-            }
-        })
-        .collect()
-}
-
 fn field(
     model: &ExposureModel,
     surface: &[Point2<f64>],
@@ -115,7 +99,7 @@ fn field(
     let deltas: Vec<f64> = (0..=steps)
         .map(|k| (top - k as f64 * sweep.step_mm).max(-sweep.depth_mm))
         .collect();
-    let normals = vertex_normals(&ring);
+    let normals = crate::trajectory::outward_vertex_normals(&ring);
     let exposure = deltas
         .iter()
         .map(|&d| {

@@ -193,6 +193,46 @@ pub struct TipSection {
     pub placement: Placement,
 }
 
+/// What a request (a goal, command-line options) says about the tip; `None` fields were not
+/// given.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TipRequest<'a> {
+    /// Tip airfoil (name or `.dat` path); default: the root's.
+    pub airfoil: Option<&'a str>,
+    /// Tip chord (mm); default: the root's.
+    pub chord_mm: Option<f64>,
+    /// Tip twist (degrees, nose up); default 0.
+    pub twist_deg: Option<f64>,
+    /// Tip leading-edge sweep (mm); default 0.
+    pub sweep_mm: Option<f64>,
+}
+
+impl TipSection {
+    /// The tip `request` asks for, completed from the root's airfoil and chord, or `None` if it
+    /// names no tip field at all (a straight cut).
+    pub fn requested(
+        request: &TipRequest<'_>,
+        root_airfoil: &AirfoilSource,
+        root_chord_mm: f64,
+        pivot_chord_fraction: f64,
+    ) -> Option<Self> {
+        if *request == TipRequest::default() {
+            return None;
+        }
+        Some(Self {
+            airfoil: request
+                .airfoil
+                .map_or_else(|| root_airfoil.clone(), AirfoilSource::parse),
+            chord_mm: request.chord_mm.unwrap_or(root_chord_mm),
+            placement: Placement {
+                sweep_mm: request.sweep_mm.unwrap_or(0.0),
+                twist_deg: request.twist_deg.unwrap_or(0.0),
+                pivot_chord_fraction,
+            },
+        })
+    }
+}
+
 /// One hot-wire cut to plan: a straight extrusion of the root section, or with a
 /// [`HotwireJob::tip`] a tapered, swept, twisted panel on a 4-axis machine ([`crate::wing`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -614,16 +654,16 @@ struct SectionJob<'a> {
     started: Instant,
 }
 
-/// Plans one section: baseline at `offset_mm`, swarm, exposure before and after.
+/// Plans one section (`foil`: normalised and scaled to `chord_mm`): baseline at `offset_mm`,
+/// swarm, exposure before and after.
 fn plan_section(
     s: &SectionJob<'_>,
-    loaded: &Airfoil,
+    foil: &Airfoil,
     chord_mm: f64,
     live: &mut Live<'_, impl FnMut(LiveMaps)>,
     progress: &mut impl FnMut(&JobProgress) -> ControlFlow<()>,
 ) -> Result<(SectionPlan, usize), JobError> {
     let job = s.job;
-    let foil = loaded.normalised().scaled(chord_mm)?;
     let wrap = |source: PsoError| JobError::Plan {
         airfoil: s.name.to_string(),
         source,
@@ -634,7 +674,7 @@ fn plan_section(
         job.path_points
     };
     let baseline =
-        Baseline::fixed_offset(&foil, s.offset_mm, path_points).map_err(|e| wrap(e.into()))?;
+        Baseline::fixed_offset(foil, s.offset_mm, path_points).map_err(|e| wrap(e.into()))?;
     let objective = Objective {
         cse: job.cse,
         // Only the root's feed is a variable: the wire has one timing for both faces.
@@ -646,8 +686,8 @@ fn plan_section(
         ..job.objective
     };
     // A sharp trailing edge repeats its point at both ends: one more point gives N panels.
-    let surface_points = surface_points(&foil, job.panels)?;
-    let problem = Problem::new(&foil, surface_points, baseline, objective).map_err(wrap)?;
+    let surface_points = surface_points(foil, job.panels)?;
+    let problem = Problem::new(foil, surface_points, baseline, objective).map_err(wrap)?;
     let k = problem.trajectory().control_points();
     let baseline_exposure = problem.exposure(&vec![0.0; k]).map_err(wrap)?;
     live.show(&problem, &vec![0.0; k], 0, s.frame_id);
@@ -685,7 +725,7 @@ fn plan_section(
     feed_ratio.extend_from_slice(&segment_ratios);
     let plan = SectionPlan {
         feed_ratio,
-        airfoil: loaded.name().to_string(),
+        airfoil: foil.name().to_string(),
         chord_mm,
         foil: foil.points().to_vec(),
         surface: foil.resampled_cosine(surface_points)?.points().to_vec(),
@@ -744,6 +784,8 @@ pub fn plan_observed(
         .expect("validate checked the hotwire section");
     let four_axis = job.machine.is_four_axis_hotwire();
     let root_loaded = job.root_airfoil.load()?;
+    let root_foil = root_loaded.normalised().scaled(job.chord_mm)?;
+    // The tip, normalised and scaled, unless it is the root again (a straight cut).
     let tip = match &job.tip {
         Some(t) => {
             let loaded = t.airfoil.load()?;
@@ -751,7 +793,11 @@ pub fn plan_observed(
                 && t.chord_mm == job.chord_mm
                 && t.placement.sweep_mm == 0.0
                 && t.placement.twist_deg == 0.0;
-            (!straight).then_some((t, loaded))
+            if straight {
+                None
+            } else {
+                Some((t, loaded.normalised().scaled(t.chord_mm)?))
+            }
         }
         None => None,
     };
@@ -762,11 +808,9 @@ pub fn plan_observed(
     let mut notes = proc.notes.clone();
 
     // Offsets: the longer section is the faster face (nominal offset), the other is wider.
-    let root_perimeter = perimeter_mm(&root_loaded.normalised().scaled(job.chord_mm)?);
     let (root_offset, tip_offset) = match &tip {
-        Some((t, loaded)) => {
-            let tip_perimeter = perimeter_mm(&loaded.normalised().scaled(t.chord_mm)?);
-            let ratio = root_perimeter / tip_perimeter;
+        Some((_, tip_foil)) => {
+            let ratio = perimeter_mm(&root_foil) / perimeter_mm(tip_foil);
             if ratio >= 1.0 {
                 (proc.offset_mm, proc.offset_mm * ratio)
             } else {
@@ -789,17 +833,17 @@ pub fn plan_observed(
     };
     let (mut root, mut iterations) = plan_section(
         &section_job(&root_name, root_offset, SECTION_FRAME_ID, 0),
-        &root_loaded,
+        &root_foil,
         job.chord_mm,
         &mut live,
         &mut progress,
     )?;
     let tip_plan = match &tip {
-        Some((t, loaded)) => {
+        Some((t, tip_foil)) => {
             let name = t.airfoil.to_string();
             let (plan, n) = plan_section(
                 &section_job(&name, tip_offset, TIP_FRAME_ID, iterations),
-                loaded,
+                tip_foil,
                 t.chord_mm,
                 &mut live,
                 &mut progress,

@@ -28,7 +28,8 @@ use serde::{Deserialize, Serialize};
 use cell_profiles::MachineProfile;
 
 use crate::job::{
-    self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress, LiveMaps, LiveOptions, TipSection,
+    self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress, LiveMaps, LiveOptions, TipRequest,
+    TipSection,
 };
 use crate::pso::PsoConfig;
 use crate::wing::Placement;
@@ -116,27 +117,20 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
     };
     let machine = MachineProfile::resolve(machine_name).map_err(|e| e.to_string())?;
     let root_airfoil = AirfoilSource::parse(&goal.root_airfoil);
-    let tapered = !goal.tip_airfoil.is_empty()
-        || goal.tip_chord_mm != 0.0
-        || goal.tip_twist_deg != 0.0
-        || goal.tip_sweep_mm != 0.0;
-    let tip = tapered.then(|| TipSection {
-        airfoil: if goal.tip_airfoil.is_empty() {
-            root_airfoil.clone()
-        } else {
-            AirfoilSource::parse(&goal.tip_airfoil)
-        },
-        chord_mm: if goal.tip_chord_mm == 0.0 {
-            goal.root_chord_mm
-        } else {
-            goal.tip_chord_mm
-        },
-        placement: Placement {
-            sweep_mm: goal.tip_sweep_mm,
-            twist_deg: goal.tip_twist_deg,
-            pivot_chord_fraction: p.twist_pivot_chord_fraction,
-        },
-    });
+    // Empty strings and zeros are the goal's "not given".
+    let given = |v: f64| (v != 0.0).then_some(v);
+    let request = TipRequest {
+        airfoil: (!goal.tip_airfoil.is_empty()).then_some(goal.tip_airfoil.as_str()),
+        chord_mm: given(goal.tip_chord_mm),
+        twist_deg: given(goal.tip_twist_deg),
+        sweep_mm: given(goal.tip_sweep_mm),
+    };
+    let tip = TipSection::requested(
+        &request,
+        &root_airfoil,
+        goal.root_chord_mm,
+        p.twist_pivot_chord_fraction,
+    );
     let job = HotwireJob {
         root_airfoil,
         chord_mm: goal.root_chord_mm,

@@ -372,13 +372,23 @@ impl Problem {
         }
     }
 
+    /// The exposure weight of each wire segment for `controls`: its dwell time relative to the
+    /// nominal feed, 1/ρ ([`FeedVariable`]).
+    fn feed_weights_into(&self, controls: &[f64], out: &mut Vec<f64>) {
+        self.feed_ratios_into(controls, out);
+        for w in out.iter_mut() {
+            *w = 1.0 / *w;
+        }
+    }
+
     /// The wire segments of `controls`' path, weighted by the feed (1/ρ per segment).
     ///
     /// # Errors
     /// A degenerate path (non-finite controls).
     pub fn wire(&self, controls: &[f64]) -> Result<WireSegments, PsoError> {
         let mut wire = WireSegments::from_points(&self.path(controls))?;
-        let weights: Vec<f64> = self.feed_ratios(controls).iter().map(|r| 1.0 / r).collect();
+        let mut weights = Vec::new();
+        self.feed_weights_into(controls, &mut weights);
         wire.set_weights(&weights)?;
         Ok(wire)
     }
@@ -408,16 +418,10 @@ impl Problem {
     /// # Errors
     /// A degenerate path (non-finite controls).
     pub fn exposure_matrix(&self, controls: &[f64]) -> Result<(usize, usize, Vec<f32>), PsoError> {
-        let (rows, cols, mut values) = self
+        Ok(self
             .objective
             .model
-            .exposure_matrix(&self.surface, &self.path(controls))?;
-        for (row, r) in values.chunks_mut(cols).zip(self.feed_ratios(controls)) {
-            for v in row {
-                *v /= r as f32;
-            }
-        }
-        Ok((rows, cols, values))
+            .exposure_matrix_of(&self.surface, &self.wire(controls)?)?)
     }
 
     /// T ∩ G = ∅ with the clearance for `path` = the trajectory of `controls`, answered
@@ -461,10 +465,7 @@ impl Problem {
             return f64::INFINITY;
         }
         if self.objective.feed.is_some() {
-            self.feed_ratios_into(controls, &mut scratch.weights);
-            for w in &mut scratch.weights {
-                *w = 1.0 / *w;
-            }
+            self.feed_weights_into(controls, &mut scratch.weights);
             if scratch.wire.set_weights(&scratch.weights).is_err() {
                 return f64::INFINITY;
             }

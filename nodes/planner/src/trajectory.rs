@@ -109,18 +109,7 @@ impl Baseline {
                 requirement: "at least 3 distinct points",
             });
         }
-        let dir = |k: usize| (points[(k + 1) % n] - points[k % n]).normalize();
-        let mut normals = Vec::with_capacity(n + 1);
-        for k in 0..n {
-            let (d_in, d_out) = (dir(k + n - 1), dir(k));
-            let s = d_in + d_out;
-            let t = if s.norm() > 1e-12 {
-                s.normalize()
-            } else {
-                d_out
-            };
-            normals.push(Vector2::new(t.y, -t.x));
-        }
+        let mut normals = outward_vertex_normals(&points[..n]);
         normals.push(normals[0]);
         let mut arc = Vec::with_capacity(n + 1);
         let mut s = 0.0;
@@ -153,6 +142,26 @@ impl Baseline {
     pub fn arc_positions(&self) -> &[f64] {
         &self.arc
     }
+}
+
+/// The outward unit normal at each vertex of the closed anticlockwise polygon `ring` (distinct
+/// points, closing segment implied): the right-hand perpendicular of the sum of the unit
+/// directions in and out of the vertex, or of the outgoing direction alone where they cancel.
+pub(crate) fn outward_vertex_normals(ring: &[Point2<f64>]) -> Vec<Vector2<f64>> {
+    let n = ring.len();
+    let dir = |k: usize| (ring[(k + 1) % n] - ring[k % n]).normalize();
+    (0..n)
+        .map(|k| {
+            let (d_in, d_out) = (dir(k + n - 1), dir(k));
+            let s = d_in + d_out;
+            let t = if s.norm() > 1e-12 {
+                s.normalize()
+            } else {
+                d_out
+            };
+            Vector2::new(t.y, -t.x)
+        })
+        .collect()
 }
 
 /// δ(u) of a periodic uniform cubic B-spline with control values `controls` (K ≥ 1) at
