@@ -192,7 +192,7 @@ fn cell_hotwire_writes_trajectory_and_report() {
 
     let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
     let mut lines = csv.lines();
-    // The default machine is the 4-axis hotwire_xyuv: carriage columns x,y,u,v.
+    // The default machine is the 4-axis linuxcnc-xyuv: carriage columns x,y,u,v.
     assert_eq!(
         lines.next(),
         Some("x_mm,y_mm,u_mm,v_mm,feed_mm_s,current_a")
@@ -275,7 +275,7 @@ fn cell_hotwire_plans_a_tapered_panel_and_refuses_it_on_a_two_axis_machine() {
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(report["machine"], "hotwire_xyuv");
+    assert_eq!(report["machine"], "linuxcnc-xyuv");
     assert_eq!(report["tip"]["chord_mm"], 120.0);
     assert_eq!(report["iterations"], 40, "root and tip sections");
     assert!(report["tip"]["offset_mm"].as_f64() > report["offset_mm"].as_f64());
@@ -299,7 +299,7 @@ fn cell_hotwire_plans_a_tapered_panel_and_refuses_it_on_a_two_axis_machine() {
     let run = std::process::Command::new(CELL)
         .args(args)
         .arg(&out)
-        .args(["--machine", "hotwire_xy"])
+        .args(["--machine", "grbl-xy"])
         .output()
         .unwrap();
     assert_eq!(run.status.code(), Some(64));

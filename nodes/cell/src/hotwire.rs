@@ -45,7 +45,7 @@ pub struct HotwireArgs {
     /// Panel span between the root and tip faces (mm).
     #[arg(long, value_name = "MM")]
     pub span: Option<f64>,
-    /// Machine profile: a name under config/machines (hotwire_xyuv, hotwire_xy) or a YAML file.
+    /// Machine profile: a name under config/machines (linuxcnc-xyuv, grbl-xy) or a YAML file.
     #[arg(long, value_name = "NAME|FILE", default_value = job::DEFAULT_MACHINE)]
     pub machine: String,
     /// Foam name or alias from the material library (e.g. EPS, XPS, eps_s_grade).

@@ -22,7 +22,7 @@
 use std::fmt::Write as _;
 
 use cell_msgs::{Toolpath, ToolpathSegment};
-use cell_profiles::{Dialect, FeedMode, GcodeSettings, MachineProfile};
+use cell_profiles::{Dialect, FeedMode, GcodeSettings, MachineProfile, Units};
 
 use crate::EmitError;
 
@@ -72,8 +72,9 @@ pub fn emit(
             sanitise(&profile.name)
         ))
     );
+    let _ = writeln!(out, "{}", modal_line(g));
     for line in &g.program_start {
-        let _ = writeln!(out, "{line}");
+        let _ = writeln!(out, "{}", fill_template(line, job_id, &profile.name));
     }
     let Some(first) = poses.first() else {
         let _ = writeln!(out, "M2");
@@ -115,10 +116,16 @@ pub fn emit(
     if let Some(p) = &g.power {
         let _ = writeln!(out, "{}", p.off);
     }
-    for line in &g.program_end {
-        let _ = writeln!(out, "{line}");
+    if g.feed_mode == FeedMode::InverseTime {
+        // Leave the controller in the usual mode for whatever is run next.
+        let _ = writeln!(out, "G94");
     }
-    let _ = writeln!(out, "M2");
+    for line in &g.program_end {
+        let _ = writeln!(out, "{}", fill_template(line, job_id, &profile.name));
+    }
+    if g.dialect != Dialect::Marlin {
+        let _ = writeln!(out, "M2");
+    }
     Ok(out)
 }
 
@@ -260,6 +267,30 @@ fn feed_word(g: &GcodeSettings, a: &Pose, b: &Pose) -> String {
     }
 }
 
+/// The modal words the program relies on, from the settings (never from a template).
+fn modal_line(g: &GcodeSettings) -> String {
+    let units = match g.units {
+        Units::Mm => "G21",
+        Units::Inch => "G20",
+    };
+    let feed = match g.feed_mode {
+        FeedMode::UnitsPerMinute => "G94",
+        FeedMode::InverseTime => "G93",
+    };
+    match g.dialect {
+        Dialect::Marlin => format!("{units} G90"),
+        Dialect::Grbl => format!("G17 {units} G90 {feed}"),
+        // Arc centres incremental (I, J from the start point), as the fitter writes them.
+        Dialect::Linuxcnc | Dialect::Mach3 => format!("G17 {units} G90 G91.1 {feed}"),
+    }
+}
+
+/// A start/end template line with `{job}` and `{profile}` filled in, sanitised.
+fn fill_template(line: &str, job_id: &str, profile: &str) -> String {
+    line.replace("{job}", &sanitise(job_id))
+        .replace("{profile}", &sanitise(profile))
+}
+
 fn s_value(g: &GcodeSettings, power: f64) -> String {
     let p = g.power.as_ref().map_or(1.0, |p| p.s_per_unit);
     number(power * p, g.power.as_ref().map_or(0, |p| p.s_decimals))
@@ -326,7 +357,7 @@ mod tests {
 
     #[test]
     fn straight_cut_on_the_four_axis_profile_in_inverse_time() {
-        let profile = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        let profile = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
         let tp = toolpath(vec![
             seg(
                 ToolpathSegment::KIND_LEAD,
@@ -346,8 +377,8 @@ mod tests {
         assert_eq!(
             lines,
             [
-                "(cellsuite emitter: job job _1__ M2, profile hotwire_xyuv)",
-                "G17 G21 G90 G93",
+                "(cellsuite emitter: job job _1__ M2, profile linuxcnc-xyuv)",
+                "G17 G21 G90 G91.1 G93",
                 "G0 X100.000 Y50.000 U100.000 V50.000",
                 "M3 S300",
                 "G4 P2.000",
@@ -362,7 +393,7 @@ mod tests {
 
     #[test]
     fn bad_input_is_named_and_gives_no_program() {
-        let profile = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        let profile = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
         let mut tp = toolpath(vec![seg(0, &[(10.0, 10.0), (20.0, 10.0)], 5.0, 3.0)]);
         tp.segments[0].points[1].y = f64::NAN;
         let e = emit(&tp, &profile, "j").unwrap_err();
@@ -383,7 +414,7 @@ mod tests {
             e.to_string().starts_with("segment 0 point 1: X = 700.000"),
             "{e}"
         );
-        let two_axis = MachineProfile::resolve("hotwire_xy").unwrap();
+        let two_axis = MachineProfile::resolve("grbl-xy").unwrap();
         let mut tp = toolpath(vec![seg(0, &[(10.0, 10.0), (20.0, 10.0)], 5.0, 3.0)]);
         tp.segments[0].secondary_points = tp.segments[0].points.clone();
         tp.segments[0].secondary_points[1].x = 15.0;

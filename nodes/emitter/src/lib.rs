@@ -2,6 +2,7 @@
 //!
 //! - [`gcode`]: G-code for the profile's dialect (`cell_profiles::GcodeSettings`): axis words,
 //!   decimals, G94 or G93 inverse-time feeds, power words, pre-heat dwell, start and end lines.
+//! - [`rapid`]: ABB RAPID modules (`.mod`) and program files (`.pgf`) for a robot profile.
 //! - [`program`]: the `MachineProgram` message (files, line count, SHA-256) and atomic file
 //!   output.
 //!
@@ -12,6 +13,74 @@
 
 pub mod gcode;
 pub mod program;
+pub mod rapid;
+
+use cell_msgs::{MachineProgram, ProgramFile, Toolpath};
+use cell_profiles::MachineProfile;
+
+/// The program for `toolpath` on `profile`: G-code (one `.ngc` file) if the profile has a
+/// `gcode` section, RAPID modules if it has a `rapid` section. `job_id` names the files and
+/// goes into their header comments, sanitised.
+///
+/// # Errors
+/// A profile with neither section, or any error of [`gcode::emit`] / [`rapid::emit`]. Nothing
+/// is returned unless the whole program was written.
+pub fn emit_program(
+    toolpath: &Toolpath,
+    profile: &MachineProfile,
+    job_id: &str,
+) -> Result<MachineProgram, EmitError> {
+    let (dialect, files) = if let Some(g) = &profile.gcode {
+        let text = gcode::emit(toolpath, profile, job_id)?;
+        let dialect = serde_dialect_name(g.dialect);
+        (
+            dialect,
+            vec![ProgramFile {
+                name: format!("{}.ngc", file_stem(job_id)),
+                text,
+            }],
+        )
+    } else if profile.rapid.is_some() {
+        ("rapid".to_string(), rapid::emit(toolpath, profile, job_id)?)
+    } else {
+        return Err(EmitError::MissingSection {
+            profile: profile.name.clone(),
+            section: "gcode or rapid",
+        });
+    };
+    Ok(program::machine_program(
+        job_id,
+        &dialect,
+        &profile.name,
+        files,
+    ))
+}
+
+/// The dialect's name as profiles spell it (`grbl`, `linuxcnc`, `mach3`, `marlin`).
+fn serde_dialect_name(d: cell_profiles::Dialect) -> String {
+    format!("{d:?}").to_ascii_lowercase()
+}
+
+/// A file name stem from a job id: letters, digits, `_` and `-` only (others become `_`), at
+/// most 64 characters, `program` if nothing is left.
+pub fn file_stem(job_id: &str) -> String {
+    let stem: String = job_id
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(64)
+        .collect();
+    if stem.trim_matches('_').is_empty() {
+        "program".into()
+    } else {
+        stem
+    }
+}
 
 /// A toolpath or profile the emitter cannot turn into a program. One line, naming the segment
 /// and point (0-based) where it applies.

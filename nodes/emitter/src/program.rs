@@ -80,7 +80,7 @@ mod tests {
         let p = machine_program(
             "j",
             "linuxcnc",
-            "hotwire_xyuv",
+            "linuxcnc-xyuv",
             vec![file("a.ngc", "G0 X1\nM2\n"), file("b.ngc", "M2\n")],
         );
         assert_eq!(p.line_count, 3);

@@ -132,7 +132,7 @@ fn tapered_panel_on_linuxcnc_xyuv_is_accepted_with_its_points_and_timing() {
     };
     let planned = plan(&job(Some(tip)), |_| ControlFlow::Continue(())).unwrap();
     let tp = planned.to_toolpath("panel-1");
-    let profile = MachineProfile::resolve("hotwire_xyuv").unwrap();
+    let profile = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
     let text = gcode::emit(&tp, &profile, "panel-1").unwrap();
     let (code, json) = interpret(&text, "XYUV");
     assert_eq!(code, 0, "{}", json["error"]);
@@ -177,7 +177,7 @@ fn tapered_panel_on_linuxcnc_xyuv_is_accepted_with_its_points_and_timing() {
 #[test]
 fn straight_cut_on_grbl_xy_is_accepted_with_its_points_and_timing() {
     let planned = plan(&job(None), |_| ControlFlow::Continue(())).unwrap();
-    let profile = MachineProfile::resolve("hotwire_xy").unwrap();
+    let profile = MachineProfile::resolve("grbl-xy").unwrap();
     // Planned for the 4-axis default; a straight cut's UV equals its XY, so it fits the
     // 2-axis machine as long as it lies inside its travel.
     let tp = planned.to_toolpath("straight-1");

@@ -276,7 +276,7 @@ pub struct HotwireJob {
 }
 
 /// The machine profile [`HotwireJob::default`] uses.
-pub const DEFAULT_MACHINE: &str = "hotwire_xyuv";
+pub const DEFAULT_MACHINE: &str = "linuxcnc-xyuv";
 
 impl Default for HotwireJob {
     /// s1223 at 200 mm, straight, 300 mm span on [`DEFAULT_MACHINE`], in H-grade EPS at 3 A and
@@ -1632,7 +1632,7 @@ mod tests {
 
     #[test]
     fn out_of_travel_and_two_axis_machines_are_refused_by_name() {
-        let mut far = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        let mut far = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
         far.hotwire.as_mut().unwrap().part_origin_mm = [450.0, 60.0];
         let e = plan(
             &HotwireJob {
@@ -1646,13 +1646,13 @@ mod tests {
         assert!(e.to_string().contains("X = "), "{e}");
         let e = plan(
             &HotwireJob {
-                machine: MachineProfile::resolve("hotwire_xy").unwrap(),
+                machine: MachineProfile::resolve("grbl-xy").unwrap(),
                 ..tapered(1)
             },
             |_| ControlFlow::Continue(()),
         )
         .unwrap_err();
-        assert!(e.to_string().contains("hotwire_xy"), "{e}");
+        assert!(e.to_string().contains("grbl-xy"), "{e}");
         let e = validate(&HotwireJob {
             span_mm: 900.0,
             ..small(1)

@@ -567,7 +567,7 @@ mod tests {
         assert_eq!(job.span_mm, p.span_mm);
         let e = goal_to_job(
             &PlanHotwireGoal {
-                machine_profile: "hotwire_xy".into(),
+                machine_profile: "grbl-xy".into(),
                 ..tapered.clone()
             },
             &p,

@@ -9,7 +9,7 @@
 //! names the file and the field (and the line, for YAML syntax and unknown keys).
 //!
 //! ```
-//! let profile = cell_profiles::MachineProfile::resolve("hotwire_xyuv").unwrap();
+//! let profile = cell_profiles::MachineProfile::resolve("linuxcnc-xyuv").unwrap();
 //! assert!(profile.is_four_axis_hotwire());
 //! assert!(profile.check_position(&[('X', 10.0), ('U', 700.0)]).is_err());
 //! ```
@@ -17,15 +17,18 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+pub mod rapid;
+pub use rapid::RapidSettings;
+
 /// The profiles shipped in `config/machines/`, compiled in: (name, YAML text).
 pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
     (
-        "hotwire_xy",
-        include_str!("../../../config/machines/hotwire_xy.yaml"),
+        "grbl-xy",
+        include_str!("../../../config/machines/grbl-xy.yaml"),
     ),
     (
-        "hotwire_xyuv",
-        include_str!("../../../config/machines/hotwire_xyuv.yaml"),
+        "linuxcnc-xyuv",
+        include_str!("../../../config/machines/linuxcnc-xyuv.yaml"),
     ),
 ];
 
@@ -124,6 +127,9 @@ pub struct MachineProfile {
     /// How the emitter writes G-code for this machine; absent: the machine takes no G-code.
     #[serde(default)]
     pub gcode: Option<GcodeSettings>,
+    /// How the emitter writes ABB RAPID for this robot; exclusive with `gcode`.
+    #[serde(default)]
+    pub rapid: Option<RapidSettings>,
 }
 
 /// A G-code dialect: what the controller accepts.
@@ -184,6 +190,77 @@ pub struct PowerWords {
     pub s_decimals: usize,
 }
 
+/// Length units of a program.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Units {
+    /// Millimetres (G21).
+    #[default]
+    Mm,
+    /// Inches (G20): coordinates and feeds are divided by 25.4.
+    Inch,
+}
+
+/// Pierce handling for sheet cutting: power goes on at the start of every cut segment and off
+/// at its end, instead of once for the whole program.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Pierce {
+    /// Dwell with power on before the cut moves, s (the pierce time).
+    pub dwell_s: f64,
+    /// Torch or head height while piercing, mm on the `z` axis word; needs `z_cut_mm` and
+    /// `z_travel_mm` too.
+    #[serde(default)]
+    pub z_pierce_mm: Option<f64>,
+    /// Height while cutting, mm.
+    #[serde(default)]
+    pub z_cut_mm: Option<f64>,
+    /// Height for travel moves between cuts, mm.
+    #[serde(default)]
+    pub z_travel_mm: Option<f64>,
+}
+
+/// Whether E words are positions or increments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ExtrusionMode {
+    /// M82: E is the filament position since the last reset.
+    Absolute,
+    /// M83: E is the filament pushed by this move.
+    Relative,
+}
+
+/// Material extrusion (G-Wing-style printing): the toolpath's power on deposit segments is a
+/// volumetric flow (mm³/s), written as filament length on the extruder axis.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Extrusion {
+    /// The extruder's axis letter (`E` on Marlin).
+    #[serde(default = "default_extruder_axis")]
+    pub axis: char,
+    /// Absolute or relative E.
+    pub mode: ExtrusionMode,
+    /// Filament diameter, mm (E = volume / filament cross-section).
+    pub filament_diameter_mm: f64,
+    /// Filament pulled back before each travel move, mm (0: none).
+    #[serde(default)]
+    pub retract_mm: f64,
+    /// Speed of the retract and the un-retract, mm/s.
+    #[serde(default = "default_retract_feed")]
+    pub retract_feed_mm_s: f64,
+    /// Lift of the nozzle during travel moves, mm (0: none; needs the `z` axis word).
+    #[serde(default)]
+    pub z_hop_mm: f64,
+}
+
+fn default_extruder_axis() -> char {
+    'E'
+}
+
+fn default_retract_feed() -> f64 {
+    40.0
+}
+
 /// G-code output settings (the emitter's part of a profile).
 #[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
@@ -192,22 +269,103 @@ pub struct GcodeSettings {
     pub dialect: Dialect,
     /// Axis letters.
     pub axis_words: AxisWords,
+    /// Length units of the program.
+    #[serde(default)]
+    pub units: Units,
     /// Decimal places of coordinates.
     pub decimals: usize,
     /// Feed mode.
     pub feed_mode: FeedMode,
-    /// Lines before the first move (units, plane, absolute mode…).
+    /// Lines after the emitter's modal line (units, absolute mode, feed mode) and before the
+    /// first move. `{job}` and `{profile}` are replaced by the (sanitised) job id and profile
+    /// name. The modal words G20/G21, G90/G91 and G93/G94 come from `units` and `feed_mode`
+    /// and may not appear here.
     #[serde(default)]
     pub program_start: Vec<String>,
-    /// Lines after the last move (before the program end word).
+    /// Lines after the last move (before the program end word), with the same placeholders.
     #[serde(default)]
     pub program_end: Vec<String>,
     /// Power words; absent: the program switches no power.
     #[serde(default)]
     pub power: Option<PowerWords>,
-    /// Dwell after switching power on, before the first move, s (wire pre-heat).
+    /// Dwell after switching power on, before the first move, s (wire pre-heat). Without
+    /// `pierce` the power stays on for the whole program.
     #[serde(default)]
     pub preheat_dwell_s: f64,
+    /// Sheet cutting: power on and off around every cut segment (needs `power`).
+    #[serde(default)]
+    pub pierce: Option<Pierce>,
+    /// Extrusion printing: E words from the deposit segments' flow.
+    #[serde(default)]
+    pub extrusion: Option<Extrusion>,
+    /// Fit G2/G3 arcs to runs of points that lie within this distance of one circle, mm
+    /// (absent: straight moves only). Only on machines without a second carriage.
+    #[serde(default)]
+    pub arc_tolerance_mm: Option<f64>,
+}
+
+/// `Err(reason)` unless `v` is finite and ≥ 0.
+fn non_negative(name: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{name} = {v} must be finite and >= 0"))
+    }
+}
+
+/// Placeholders a start or end template may use.
+pub const TEMPLATE_PLACEHOLDERS: &[&str] = &["{job}", "{profile}"];
+
+/// Checks one start/end template line: known placeholders only, and none of the modal words
+/// the emitter writes itself (a template that switched to G91 or G20 would silently change
+/// every move after it).
+fn check_template(line: &str) -> Result<(), String> {
+    let mut rest = line;
+    while let Some(open) = rest.find('{') {
+        let close = rest[open..]
+            .find('}')
+            .ok_or_else(|| format!("{line:?}: unclosed '{{'"))?;
+        let placeholder = &rest[open..open + close + 1];
+        if !TEMPLATE_PLACEHOLDERS.contains(&placeholder) {
+            return Err(format!(
+                "{line:?}: unknown placeholder {placeholder} (known: {})",
+                TEMPLATE_PLACEHOLDERS.join(", ")
+            ));
+        }
+        rest = &rest[open + close + 1..];
+    }
+    let upper = line.to_ascii_uppercase();
+    // Words only: text inside (...) or after ';' is a comment.
+    let code: String = {
+        let mut depth = 0;
+        let mut out = String::new();
+        for c in upper.chars() {
+            match c {
+                ';' if depth == 0 => break,
+                '(' => depth += 1,
+                ')' => depth -= 1,
+                _ if depth == 0 => out.push(c),
+                _ => {}
+            }
+        }
+        out
+    };
+    let compact: String = code.chars().filter(|c| !c.is_whitespace()).collect();
+    for word in ["G20", "G21", "G90", "G91", "G93", "G94"] {
+        let mut from = 0;
+        while let Some(i) = compact[from..].find(word) {
+            let end = from + i + word.len();
+            // G90 but not G90.1 (arc-centre mode), and not G901 etc.
+            let next = compact[end..].chars().next();
+            if !matches!(next, Some(c) if c.is_ascii_digit() || c == '.') {
+                return Err(format!(
+                    "{line:?}: {word} is written by the emitter from units and feed_mode; remove it"
+                ));
+            }
+            from = end;
+        }
+    }
+    Ok(())
 }
 
 /// A position outside a machine's travel.
@@ -420,6 +578,108 @@ impl MachineProfile {
                     ));
                 }
             }
+            for (field, lines) in [
+                ("gcode.program_start", &g.program_start),
+                ("gcode.program_end", &g.program_end),
+            ] {
+                for (i, line) in lines.iter().enumerate() {
+                    check_template(line)
+                        .map_err(|reason| invalid(&format!("{field}[{i}]"), reason))?;
+                }
+            }
+            if let Some(pierce) = &g.pierce {
+                if g.power.is_none() {
+                    return Err(invalid(
+                        "gcode.pierce",
+                        "pierce handling switches power: a power section is needed".into(),
+                    ));
+                }
+                non_negative("gcode.pierce.dwell_s", pierce.dwell_s)
+                    .map_err(|r| invalid("gcode.pierce.dwell_s", r))?;
+                let heights = [pierce.z_pierce_mm, pierce.z_cut_mm, pierce.z_travel_mm];
+                if heights.iter().any(Option::is_some) {
+                    if heights.iter().any(Option::is_none) {
+                        return Err(invalid(
+                            "gcode.pierce",
+                            "z_pierce_mm, z_cut_mm and z_travel_mm come together".into(),
+                        ));
+                    }
+                    let Some(z) = w.z else {
+                        return Err(invalid(
+                            "gcode.pierce",
+                            "pierce heights need the z axis word".into(),
+                        ));
+                    };
+                    let [lo, hi] = self.axes[&z];
+                    for (name, h) in [
+                        ("z_pierce_mm", pierce.z_pierce_mm),
+                        ("z_cut_mm", pierce.z_cut_mm),
+                        ("z_travel_mm", pierce.z_travel_mm),
+                    ] {
+                        let h = h.unwrap_or_default();
+                        if !(h.is_finite() && lo <= h && h <= hi) {
+                            return Err(invalid(
+                                &format!("gcode.pierce.{name}"),
+                                format!("{h} is outside the {z} travel {lo}..{hi}"),
+                            ));
+                        }
+                    }
+                }
+            }
+            if let Some(e) = &g.extrusion {
+                if !self.axes.contains_key(&e.axis) {
+                    return Err(invalid(
+                        "gcode.extrusion.axis",
+                        format!("axis {} is not one of the machine's axes", e.axis),
+                    ));
+                }
+                if !(e.filament_diameter_mm.is_finite() && e.filament_diameter_mm > 0.0) {
+                    return Err(invalid(
+                        "gcode.extrusion.filament_diameter_mm",
+                        format!("{} must be finite and > 0", e.filament_diameter_mm),
+                    ));
+                }
+                for (name, v) in [("retract_mm", e.retract_mm), ("z_hop_mm", e.z_hop_mm)] {
+                    non_negative(name, v)
+                        .map_err(|r| invalid(&format!("gcode.extrusion.{name}"), r))?;
+                }
+                if !(e.retract_feed_mm_s.is_finite() && e.retract_feed_mm_s > 0.0) {
+                    return Err(invalid(
+                        "gcode.extrusion.retract_feed_mm_s",
+                        format!("{} must be finite and > 0", e.retract_feed_mm_s),
+                    ));
+                }
+                if e.z_hop_mm > 0.0 && w.z.is_none() {
+                    return Err(invalid(
+                        "gcode.extrusion.z_hop_mm",
+                        "a Z-hop needs the z axis word".into(),
+                    ));
+                }
+            }
+            if let Some(t) = g.arc_tolerance_mm {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(invalid(
+                        "gcode.arc_tolerance_mm",
+                        format!("{t} must be finite and > 0"),
+                    ));
+                }
+                if w.u.is_some() {
+                    return Err(invalid(
+                        "gcode.arc_tolerance_mm",
+                        "arcs are not fitted on a machine with a second carriage (u, v)".into(),
+                    ));
+                }
+            }
+        }
+        if let Some(r) = &self.rapid {
+            if self.gcode.is_some() {
+                return Err(invalid(
+                    "rapid",
+                    "a machine takes G-code or RAPID, not both (remove gcode or rapid)".into(),
+                ));
+            }
+            r.validate(self)
+                .map_err(|(field, reason)| invalid(&format!("rapid.{field}"), reason))?;
         }
         Ok(())
     }
@@ -464,20 +724,25 @@ mod tests {
             let p = MachineProfile::resolve(name).unwrap();
             assert_eq!(&p.name, name);
         }
-        assert!(MachineProfile::resolve("HOTWIRE_XYUV")
+        assert!(MachineProfile::resolve("LINUXCNC-XYUV")
             .unwrap()
             .is_four_axis_hotwire());
-        assert!(!MachineProfile::resolve("hotwire_xy")
+        assert!(!MachineProfile::resolve("grbl-xy")
             .unwrap()
             .is_four_axis_hotwire());
         let e = MachineProfile::resolve("nope").unwrap_err();
-        assert!(e.to_string().contains("hotwire_xyuv"), "{e}");
+        assert!(e.to_string().contains("linuxcnc-xyuv"), "{e}");
         let e = MachineProfile::resolve("/nonexistent/m.yaml").unwrap_err();
         assert!(e.to_string().starts_with("/nonexistent/m.yaml"), "{e}");
     }
 
     fn base() -> String {
-        EMBEDDED_PROFILES[1].1.to_string()
+        EMBEDDED_PROFILES
+            .iter()
+            .find(|(n, _)| *n == "linuxcnc-xyuv")
+            .unwrap()
+            .1
+            .to_string()
     }
 
     #[test]
@@ -527,7 +792,7 @@ mod tests {
 
     #[test]
     fn gcode_sections_are_checked_against_the_axes() {
-        let p = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        let p = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
         let g = p.gcode.as_ref().unwrap();
         assert_eq!(
             (g.dialect, g.feed_mode),
@@ -546,7 +811,7 @@ mod tests {
 
     #[test]
     fn envelope_check_names_the_axis() {
-        let p = MachineProfile::resolve("hotwire_xyuv").unwrap();
+        let p = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
         assert!(p
             .check_position(&[('X', 0.0), ('Y', 300.0), ('U', 600.0), ('V', 0.0)])
             .is_ok());
