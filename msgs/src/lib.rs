@@ -1,24 +1,27 @@
 //! cellsuite message, service and action types.
 //!
-//! The `.msg`/`.action` files under `msgs/` are the single source of truth. This crate embeds
+//! The `.msg`/`.srv`/`.action` files under `msgs/` are the single source of truth. This crate embeds
 //! them ([`registry`]), parses them ([`idl`]), provides matching serde types (this module and
 //! [`builtin_interfaces`], [`std_msgs`], [`geometry_msgs`]), writes and reads ROS 2 CDR
 //! ([`to_cdr`], [`from_cdr`]) and decodes CDR from the definitions alone ([`dynamic`]). The
 //! drift test (`tests/drift.rs`) checks every Rust type against its definition.
 //!
-//! Action parts are plain messages named like rosidl does: `cell_msgs/action/PlanHotwire_Goal`
-//! is [`PlanHotwireGoal`].
+//! Service and action parts are plain messages named like rosidl does:
+//! `cell_msgs/srv/EmitProgram_Request` is [`EmitProgramRequest`] and
+//! `cell_msgs/action/PlanHotwire_Goal` is [`PlanHotwireGoal`].
 
 pub mod builtin_interfaces;
 pub mod cdr;
 pub mod dynamic;
 pub mod geometry_msgs;
 pub mod idl;
+pub mod json;
 pub mod registry;
 pub mod std_msgs;
 
 mod action;
 mod msg;
+mod srv;
 
 pub use action::{
     ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, PlanHotwireFeedback,
@@ -29,12 +32,14 @@ pub use msg::{
     HeatMap, HeatMapSizeError, MachineProgram, MachineStatus, ProgramFile, Toolpath,
     ToolpathSegment,
 };
+pub use srv::{EmitProgramRequest, EmitProgramResponse};
 
 /// A Rust type that mirrors a registered ROS 2 message definition.
 pub trait RosMessage:
     serde::Serialize + serde::de::DeserializeOwned + Clone + std::fmt::Debug + Send + Sync + 'static
 {
-    /// ROS 2 name, e.g. `cell_msgs/msg/Toolpath` or `cell_msgs/action/PlanHotwire_Goal`.
+    /// ROS 2 name, e.g. `cell_msgs/msg/Toolpath`, `cell_msgs/srv/EmitProgram_Request` or
+    /// `cell_msgs/action/PlanHotwire_Goal`.
     const ROS_NAME: &'static str;
 
     /// Package, e.g. `cell_msgs`.
@@ -120,6 +125,8 @@ macro_rules! for_each_message {
             $crate::ProgramFile => "cell_msgs/msg/ProgramFile",
             $crate::MachineProgram => "cell_msgs/msg/MachineProgram",
             $crate::MachineStatus => "cell_msgs/msg/MachineStatus",
+            $crate::EmitProgramRequest => "cell_msgs/srv/EmitProgram_Request",
+            $crate::EmitProgramResponse => "cell_msgs/srv/EmitProgram_Response",
             $crate::PlanHotwireGoal => "cell_msgs/action/PlanHotwire_Goal",
             $crate::PlanHotwireResult => "cell_msgs/action/PlanHotwire_Result",
             $crate::PlanHotwireFeedback => "cell_msgs/action/PlanHotwire_Feedback",
@@ -175,6 +182,17 @@ mod tests {
         assert_eq!(
             ExecuteProgramFeedback::type_name(),
             "ExecuteProgram_Feedback"
+        );
+        assert_eq!(
+            EmitProgramRequest::dds_type_name(),
+            "cell_msgs::srv::dds_::EmitProgram_Request_"
+        );
+        assert_eq!(
+            (
+                EmitProgramResponse::interface_kind(),
+                EmitProgramResponse::type_name()
+            ),
+            ("srv", "EmitProgram_Response")
         );
         assert_eq!(name_parts("bad"), ("", "", "bad"));
     }

@@ -1,8 +1,8 @@
 //! Every interface file of the crate, embedded at build time and keyed by ROS 2 name.
 //!
-//! Messages are registered as `pkg/msg/Type`; each action `pkg/action/Name` contributes
-//! `Name_Goal`, `Name_Result` and `Name_Feedback`. (There are no services yet; one would need a
-//! `Kind` with the parts `_Request` and `_Response`.)
+//! Messages are registered as `pkg/msg/Type`; each service `pkg/srv/Name` contributes
+//! `Name_Request` and `Name_Response`, and each action `pkg/action/Name` contributes
+//! `Name_Goal`, `Name_Result` and `Name_Feedback`.
 
 use crate::idl::{self, MessageSpec, ParseError};
 
@@ -21,6 +21,7 @@ pub enum RegistryError {
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Kind {
     Msg,
+    Srv,
     Action,
 }
 
@@ -29,6 +30,7 @@ impl Kind {
     fn parts(self) -> &'static [&'static str] {
         match self {
             Kind::Msg => &[""],
+            Kind::Srv => &["_Request", "_Response"],
             Kind::Action => &["_Goal", "_Result", "_Feedback"],
         }
     }
@@ -102,6 +104,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../msg/MachineStatus.msg"),
     ),
     (
+        "cell_msgs/srv/EmitProgram",
+        Kind::Srv,
+        include_str!("../srv/EmitProgram.srv"),
+    ),
+    (
         "cell_msgs/action/PlanHotwire",
         Kind::Action,
         include_str!("../action/PlanHotwire.action"),
@@ -138,8 +145,8 @@ fn locate(ros_name: &str) -> Option<(&'static str, Kind, &'static str, usize)> {
     })
 }
 
-/// The `.msg` text of one registered message, as in the file; for an action part, that section
-/// of the file (without the `---` lines).
+/// The `.msg` text of one registered message, as in the file; for a service or action part,
+/// that section of the file (without the `---` lines).
 pub fn definition(ros_name: &str) -> Option<&'static str> {
     let (_, kind, text, index) = locate(ros_name)?;
     if kind == Kind::Msg {
@@ -206,7 +213,7 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        assert_eq!(names.len(), 13 + 2 * 3);
+        assert_eq!(names.len(), 13 + 2 + 2 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));
@@ -232,6 +239,26 @@ mod tests {
         assert!(result.starts_with("bool success") && result.ends_with("float64 baseline_loss"));
         let feedback = definition("cell_msgs/action/ExecuteProgram_Feedback").expect("feedback");
         assert!(feedback.starts_with("uint32 acked_line"));
+    }
+
+    #[test]
+    fn service_parts_are_their_sections() {
+        let request = definition("cell_msgs/srv/EmitProgram_Request").expect("request");
+        assert!(
+            request.starts_with("# Turn a Toolpath") && request.ends_with("bool publish"),
+            "{request}"
+        );
+        let response = definition("cell_msgs/srv/EmitProgram_Response").expect("response");
+        assert!(
+            response.starts_with("# Whether a program was emitted")
+                && response.trim_end().ends_with("cell_msgs/MachineProgram program"),
+            "{response}"
+        );
+        assert!(definition("cell_msgs/srv/EmitProgram").is_none());
+        let full = full_definition("cell_msgs/srv/EmitProgram_Response").expect("resolves");
+        for dep in ["cell_msgs/msg/MachineProgram", "cell_msgs/msg/ProgramFile"] {
+            assert_eq!(full.matches(&format!("MSG: {dep}\n")).count(), 1, "{dep}");
+        }
     }
 
     #[test]

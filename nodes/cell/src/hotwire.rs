@@ -3,8 +3,17 @@
 //!
 //! Writes `DIR/trajectory.csv` (`x_mm,y_mm[,u_mm,v_mm],feed_mm_s,current_a`: the carriage
 //! positions in machine coordinates for lead-in, the closed cut and lead-out, in machine
-//! order; u,v on a 4-axis machine) and `DIR/report.json` (baseline and optimised exposure
-//! statistics of the root and, on a tapered panel, the tip; loss; run data).
+//! order; u,v on a 4-axis machine), `DIR/report.json` (baseline and optimised exposure
+//! statistics of the root and, on a tapered panel, the tip; loss; run data) and
+//! `DIR/toolpath.json` (the plan's `Toolpath` message as JSON, what `cell emit --toolpath`
+//! reads).
+//!
+//! With `--profile NAME`, also the machine program for that profile through
+//! [`cell_emitter::emit_program`]: `DIR/program.ngc` for G-code, or the RAPID files under their
+//! own names. The planning machine is `--machine`; without it, `--profile` (which must then
+//! be a hot-wire machine), else `linuxcnc-xyuv`. So `--profile grbl-xy` plans and emits for
+//! grbl-xy, and `--machine linuxcnc-xyuv --profile my-controller.yaml` plans on one profile's
+//! geometry and writes G-code for another's controller (its travel is checked again).
 
 use std::{fmt::Write as _, ops::ControlFlow, path::PathBuf, process::ExitCode};
 
@@ -45,9 +54,16 @@ pub struct HotwireArgs {
     /// Panel span between the root and tip faces (mm).
     #[arg(long, value_name = "MM")]
     pub span: Option<f64>,
-    /// Machine profile: a name under config/machines (linuxcnc-xyuv, grbl-xy) or a YAML file.
-    #[arg(long, value_name = "NAME|FILE", default_value = job::DEFAULT_MACHINE)]
-    pub machine: String,
+    /// Machine profile to plan on (geometry, travel, feed limit, wire): a name under
+    /// config/machines (linuxcnc-xyuv, grbl-xy, …) or a YAML file (default: --profile if
+    /// given, else linuxcnc-xyuv).
+    #[arg(long, value_name = "NAME|FILE")]
+    pub machine: Option<String>,
+    /// Also write the machine program for this profile: DIR/program.ngc for G-code, or the
+    /// RAPID files under their own names. Without --machine it is the planning machine too,
+    /// so it must then be a hot-wire machine.
+    #[arg(long, value_name = "NAME|FILE")]
+    pub profile: Option<String>,
     /// Foam name or alias from the material library (e.g. EPS, XPS, eps_s_grade).
     #[arg(long, value_name = "NAME")]
     pub material: Option<String>,
@@ -149,13 +165,24 @@ fn usage(message: impl std::fmt::Display) -> ExitCode {
     ExitCode::from(cell_runtime::EXIT_USAGE)
 }
 
+/// The planning machine's profile name and the flag it came from: `--machine`, else
+/// `--profile`, else the default machine.
+pub fn planning_machine(a: &HotwireArgs) -> (&str, &'static str) {
+    match (&a.machine, &a.profile) {
+        (Some(m), _) => (m, "--machine"),
+        (None, Some(p)) => (p, "--profile"),
+        (None, None) => (job::DEFAULT_MACHINE, "--machine"),
+    }
+}
+
 /// The job the options ask for.
 ///
 /// # Errors
-/// The machine profile does not resolve (the message names it).
+/// The machine profile does not resolve (the message names it and its flag).
 pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
     let defaults = HotwireJob::default();
-    let machine = MachineProfile::resolve(&a.machine).map_err(|e| format!("--machine: {e}"))?;
+    let (machine, flag) = planning_machine(a);
+    let machine = MachineProfile::resolve(machine).map_err(|e| format!("{flag}: {e}"))?;
     let root_airfoil = AirfoilSource::parse(&a.airfoil);
     let request = TipRequest {
         airfoil: a.tip.as_deref(),
@@ -247,7 +274,7 @@ pub fn run(a: HotwireArgs) -> ExitCode {
                 "twist_pivot_chord_fraction" => "--twist-pivot",
                 _ => "",
             },
-            job::JobError::Machine { .. } => "--machine",
+            job::JobError::Machine { .. } => planning_machine(&a).1,
             _ => "",
         };
         return usage(format!(
@@ -266,6 +293,15 @@ pub fn run(a: HotwireArgs) -> ExitCode {
             return usage(format!("--tip: {e}"));
         }
     }
+    let program_profile = match a
+        .profile
+        .as_deref()
+        .map(|p| crate::emit::program_profile("--profile", p))
+        .transpose()
+    {
+        Ok(p) => p,
+        Err(e) => return usage(e),
+    };
     if let Err(e) = std::fs::create_dir_all(&a.out) {
         return usage(format!("--out {}: {e}", a.out.display()));
     }
@@ -343,11 +379,18 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     };
     let json = match serde_json::to_string_pretty(&report) {
         Ok(j) => j,
-        Err(e) => return usage(format!("report: {e}")),
+        Err(e) => return failure(format!("report: {e}")),
+    };
+    let job_id = job_id(&a.airfoil);
+    let toolpath = plan.to_toolpath(&job_id);
+    let toolpath_json = match serde_json::to_string_pretty(&toolpath) {
+        Ok(j) => j,
+        Err(e) => return failure(format!("toolpath: {e}")),
     };
     for (name, text) in [
         ("trajectory.csv", trajectory_csv(&plan)),
         ("report.json", json + "\n"),
+        ("toolpath.json", toolpath_json + "\n"),
     ] {
         let path = a.out.join(name);
         if let Err(e) = std::fs::write(&path, text) {
@@ -357,6 +400,13 @@ pub fn run(a: HotwireArgs) -> ExitCode {
     for note in &plan.notes {
         eprintln!("note: {note}");
     }
+    let program = match &program_profile {
+        Some(profile) => match write_program(&toolpath, profile, &job_id, &a.out) {
+            Ok(line) => Some(line),
+            Err(e) => return failure(e),
+        },
+        None => None,
+    };
     if let (Some(chord), Some(cse)) = (a.test_cut_chord, report.estimated_cse) {
         println!("a {chord} mm test cut of the baseline path implies CSE ≈ {cse:.4}");
     }
@@ -380,5 +430,47 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         plan.machine,
         a.out.display()
     );
+    if let Some(line) = program {
+        println!("cell hotwire: program {line}");
+    }
     ExitCode::SUCCESS
+}
+
+/// The job id of a `cell hotwire` run: `hotwire-` and the airfoil's name (a file's stem).
+fn job_id(airfoil: &str) -> String {
+    let name = std::path::Path::new(airfoil)
+        .file_stem()
+        .map_or(airfoil.into(), |s| s.to_string_lossy());
+    format!("hotwire-{name}")
+}
+
+/// Emits the program for `profile` into `dir`: a single-file program (G-code) as
+/// `program.<ext>`, a multi-file one (RAPID) under the files' own names. Returns the summary
+/// and the files written, or one error line naming `--profile`.
+fn write_program(
+    toolpath: &cell_msgs::Toolpath,
+    profile: &MachineProfile,
+    job_id: &str,
+    dir: &std::path::Path,
+) -> Result<String, String> {
+    let flag = format!("--profile {}", profile.name);
+    let program = cell_emitter::emit_program(toolpath, profile, job_id)
+        .map_err(|e| format!("{flag}: no program written: {e}"))?;
+    let main = match program.files.as_slice() {
+        [only] => {
+            let ext = std::path::Path::new(&only.name)
+                .extension()
+                .map_or("ngc".into(), |e| e.to_string_lossy());
+            Some(dir.join(format!("program.{ext}")))
+        }
+        _ => None,
+    };
+    let written = cell_emitter::program::write_files(&program, dir, main.as_deref())
+        .map_err(|e| format!("{flag}: {e}"))?;
+    let names: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
+    Ok(format!(
+        "{}; wrote {}",
+        cell_emitter::program::summary(&program),
+        names.join(", ")
+    ))
 }

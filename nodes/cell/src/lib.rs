@@ -6,9 +6,13 @@
 //!   binary, so it works from any directory).
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
-//! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR` plans one hot-wire cut on the spot
-//!   (no DDS) and writes `trajectory.csv` and `report.json` (see [`hotwire`]).
+//! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
+//!   cut on the spot (no DDS) and writes `trajectory.csv`, `report.json`, `toolpath.json` and,
+//!   with `--profile`, the machine program (see [`hotwire`]).
+//! - `cell emit --toolpath FILE --profile NAME --out FILE` turns a toolpath file into a machine
+//!   program on the spot (see [`emit`]).
 
+pub mod emit;
 pub mod hotwire;
 
 use std::{path::PathBuf, process::ExitCode};
@@ -29,6 +33,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("cell_probe", cell_probe::main),
     ("monitor", cell_monitor::main),
     ("planner", cell_planner::node::main),
+    ("emitter", cell_emitter::node::main),
 ];
 
 #[derive(Parser, Debug)]
@@ -64,8 +69,13 @@ enum Command {
         #[arg(value_name = "NAME:=VALUE")]
         args: Vec<String>,
     },
-    /// Plan one hot-wire cut without DDS: write DIR/trajectory.csv and DIR/report.json.
+    /// Plan one hot-wire cut without DDS: write DIR/trajectory.csv, DIR/report.json,
+    /// DIR/toolpath.json and, with --profile, the machine program (DIR/program.ngc).
     Hotwire(Box<hotwire::HotwireArgs>),
+    /// Turn a toolpath file (JSON, e.g. from `cell hotwire`) into a machine program without
+    /// DDS. Exit status: 64 bad arguments or profile, 65 a toolpath the emitter refuses (no
+    /// file is written), 1 the output cannot be written.
+    Emit(emit::EmitArgs),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
     Node {
         /// The node's exec name.
@@ -118,6 +128,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
             }
         }
         Command::Hotwire(args) => hotwire::run(*args),
+        Command::Emit(args) => emit::run(args),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
             rerun,

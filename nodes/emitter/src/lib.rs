@@ -5,13 +5,15 @@
 //! - [`rapid`]: ABB RAPID modules (`.mod`) and program files (`.pgf`) for a robot profile.
 //! - [`program`]: the `MachineProgram` message (files, line count, SHA-256) and atomic file
 //!   output.
+//! - [`node`]: the `emitter` ROS 2 node (topic in, topic out, the `emit_program` service).
 //!
-//! Pure and synchronous: it knows nothing of ROS. Every input is checked first, so a bad
+//! Everything but [`node`] is pure and synchronous: it knows nothing of ROS. Every input is checked first, so a bad
 //! toolpath gives an error naming the segment and point and never a partial program.
 
 #![warn(missing_docs)]
 
 pub mod gcode;
+pub mod node;
 pub mod program;
 pub mod rapid;
 

@@ -1,6 +1,6 @@
 //! The `MachineProgram` message and program files on disk.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use cell_msgs::{builtin_interfaces::Time, std_msgs::Header, MachineProgram, ProgramFile};
 use sha2::{Digest, Sha256};
@@ -36,6 +36,19 @@ pub fn machine_program(
     }
 }
 
+/// One line about a program: job, profile, dialect, line count and SHA-256, e.g. `job wing-1:
+/// profile grbl-xy, dialect grbl, 214 lines, sha256 3f2a…` (the whole hash).
+pub fn summary(program: &MachineProgram) -> String {
+    format!(
+        "job {}: profile {}, dialect {}, {} lines, sha256 {}",
+        program.job_id,
+        program.machine_profile,
+        program.dialect,
+        program.line_count,
+        program.sha256
+    )
+}
+
 /// Writes `text` to `path` atomically: a temporary file in the same directory, synced, then
 /// renamed over `path`, so a reader never sees half a program.
 ///
@@ -65,6 +78,44 @@ pub fn write_atomically(path: &Path, text: &str) -> Result<(), EmitError> {
         let _ = std::fs::remove_file(&tmp);
     }
     result.map_err(io)
+}
+
+/// Writes every file of `program` atomically (see [`write_atomically`]): the first (the entry
+/// point) at `main` when given, every other file, and the first when `main` is `None`, as
+/// `dir/<its name>`. Returns the paths written, in file order.
+///
+/// Every name is checked before anything is written: a name that is not a plain file name
+/// (empty, `.`, `..`, or with a path separator) writes nothing. Each file is replaced
+/// atomically; if writing a later file fails, the earlier ones stay written.
+///
+/// # Errors
+/// [`EmitError::Io`] naming the file.
+pub fn write_files(
+    program: &MachineProgram,
+    dir: &Path,
+    main: Option<&Path>,
+) -> Result<Vec<PathBuf>, EmitError> {
+    let mut paths = Vec::with_capacity(program.files.len());
+    for (i, file) in program.files.iter().enumerate() {
+        let plain = !file.name.is_empty()
+            && file.name != "."
+            && file.name != ".."
+            && !file.name.contains(['/', '\\', '\0']);
+        if !plain {
+            return Err(EmitError::Io {
+                path: file.name.clone(),
+                message: "program file name is not a plain file name".into(),
+            });
+        }
+        paths.push(match (i, main) {
+            (0, Some(main)) => main.to_path_buf(),
+            _ => dir.join(&file.name),
+        });
+    }
+    for (path, file) in paths.iter().zip(&program.files) {
+        write_atomically(path, &file.text)?;
+    }
+    Ok(paths)
 }
 
 #[cfg(test)]
@@ -101,5 +152,44 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         let e = write_atomically(&dir.path().join("missing/job.ngc"), "x").unwrap_err();
         assert!(e.to_string().contains("missing/job.ngc"), "{e}");
+    }
+
+    #[test]
+    fn program_files_go_to_main_and_beside_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |name: &str, text: &str| ProgramFile {
+            name: name.into(),
+            text: text.into(),
+        };
+        let p = machine_program(
+            "j",
+            "rapid",
+            "robot",
+            vec![
+                file("Main.mod", "MODULE Main\n"),
+                file("j.pgf", "<Program/>\n"),
+            ],
+        );
+        let main = dir.path().join("wall.mod");
+        let written = write_files(&p, dir.path(), Some(&main)).unwrap();
+        assert_eq!(written, [main.clone(), dir.path().join("j.pgf")]);
+        assert_eq!(std::fs::read_to_string(&main).unwrap(), "MODULE Main\n");
+        let written = write_files(&p, dir.path(), None).unwrap();
+        assert_eq!(written[0], dir.path().join("Main.mod"));
+
+        for bad in ["", "..", "../x.ngc", "a/b.ngc"] {
+            let q = machine_program(
+                "j",
+                "grbl",
+                "m",
+                vec![file("ok.ngc", "M2\n"), file(bad, "x")],
+            );
+            let e = write_files(&q, dir.path(), Some(&dir.path().join("new.ngc"))).unwrap_err();
+            assert!(e.to_string().contains("not a plain file name"), "{e}");
+            assert!(
+                !dir.path().join("new.ngc").exists(),
+                "nothing written for {bad:?}"
+            );
+        }
     }
 }

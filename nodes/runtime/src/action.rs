@@ -49,8 +49,8 @@ where
     }
 }
 
-/// How long [`CellNode::wait_for_action_server`] waits after discovering a server, for the
-/// server to discover us.
+/// How long [`CellNode::wait_for_action_server`] and [`CellNode::wait_for_service`] wait after
+/// discovering a server, for the server to discover us.
 pub const SERVER_MATCH_SETTLE: std::time::Duration = std::time::Duration::from_secs(1);
 
 /// `cell_msgs/action/PlanHotwire` from the goal type `cell_msgs/action/PlanHotwire_Goal`.
@@ -65,9 +65,7 @@ fn action_type<G: RosMessage>() -> anyhow::Result<ActionTypeName> {
 /// QoS of the action services and topics, as rclcpp's defaults: reliable, volatile services and
 /// feedback; status transient-local so a late client sees where goals stand.
 fn qos() -> (QosProfile, QosProfile, QosProfile) {
-    let service = QosProfile::publisher_default()
-        .durability(Durability::Volatile)
-        .history(History::KeepLast { depth: 10 });
+    let service = crate::service::qos();
     let feedback = service.clone();
     let status = QosProfile::publisher_default()
         .durability(Durability::TransientLocal)
@@ -94,33 +92,7 @@ impl CellNode {
             dds("rr", "get_resultReply"),
             dds("rt", "feedback"),
         ];
-        let deadline = tokio::time::Instant::now() + timeout;
-        loop {
-            let participant = self.domain_participant();
-            let found_readers: Vec<String> = participant
-                .discovered_readers()
-                .into_iter()
-                .map(|r| r.subscription_topic_data.topic_name().to_string())
-                .collect();
-            let found_writers: Vec<String> = participant
-                .discovered_writers()
-                .into_iter()
-                .map(|w| w.publication_topic_data.topic_name().to_string())
-                .collect();
-            if readers.iter().all(|r| found_readers.contains(r))
-                && writers.iter().all(|w| found_writers.contains(w))
-            {
-                // Discovery is symmetric but not simultaneous: give the server time to match
-                // our readers too, or its first replies are lost (volatile services). On a
-                // loaded 2-core machine 200 ms was seen to be too short.
-                tokio::time::sleep(SERVER_MATCH_SETTLE).await;
-                return true;
-            }
-            if tokio::time::Instant::now() >= deadline {
-                return false;
-            }
-            tokio::time::sleep(std::time::Duration::from_millis(50)).await;
-        }
+        self.wait_for_endpoints(&readers, &writers, timeout).await
     }
 
     /// `name` resolved against namespace and remappings, as text and as a ROS name.

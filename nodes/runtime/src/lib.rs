@@ -1,6 +1,7 @@
 //! The cellsuite node runtime: what every node is built on.
 //!
 //! - [`action`]: ROS 2 actions (goal, feedback, result, cancel) for long jobs;
+//! - [`service`]: ROS 2 services (request, response) for short queries;
 //! - [`args`]: the ROS 2 command line (`--ros-args -r … -p … --params-file …`);
 //! - [`params`]: ROS 2 parameter YAML validated into typed structs;
 //! - [`node`]: [`CellNode`], one DDS participant per node, `ROS_DOMAIN_ID`, interface binding;
@@ -19,6 +20,7 @@ pub mod params;
 pub mod pubsub;
 pub mod qos;
 pub mod rerun_sink;
+pub mod service;
 pub mod shutdown;
 
 use std::{future::Future, process::ExitCode};
@@ -27,15 +29,26 @@ pub use node::{CellNode, FastPathMode, Network, NodeSetup};
 pub use pubsub::{Publisher, Received, Subscriber, Via};
 pub use qos::QosPreset;
 pub use rerun_sink::{RerunSink, RerunTarget};
+pub use service::{ServiceClient, ServiceServer};
 pub use shutdown::Shutdown;
 
 /// Exit status for a bad command line, parameter or launch file (as `sysexits`' EX_USAGE).
 pub const EXIT_USAGE: u8 = 64;
 
+/// Exit status for input data that cannot be used, e.g. a toolpath file the emitter refuses
+/// (as `sysexits`' EX_DATAERR).
+pub const EXIT_DATA: u8 = 65;
+
+/// A parameter value a node's body finds unusable after parsing (e.g. a machine profile name
+/// that does not resolve). [`run_node`] exits with [`EXIT_USAGE`] when the body's error is one.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct ParamError(pub String);
+
 /// Runs a node binary: logging, command line (`argv` excludes the program name), node set-up
 /// with OS-signal shutdown, parameters validated into `P`, then `body`. Any error is printed
 /// once, as one line, and becomes a non-zero exit; set-up errors (arguments, parameters, the
-/// environment) exit with [`EXIT_USAGE`].
+/// environment) and a [`ParamError`] from `body` exit with [`EXIT_USAGE`].
 pub fn run_node<P, F, Fut>(default_name: &str, argv: Vec<String>, body: F) -> ExitCode
 where
     P: serde::Serialize + serde::de::DeserializeOwned,
@@ -80,7 +93,11 @@ where
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {default_name}: {e:#}");
-                ExitCode::FAILURE
+                if e.downcast_ref::<ParamError>().is_some() {
+                    ExitCode::from(EXIT_USAGE)
+                } else {
+                    ExitCode::FAILURE
+                }
             }
         }
     });

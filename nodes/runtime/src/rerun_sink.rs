@@ -15,6 +15,7 @@
 //! | `/sheet/heat`                  | sheet temperature raster (HeatMap)      | sequencer        |
 //! | `/waam/toolpath`, `/waam/layers` | bead paths, slices                    | slicer           |
 //! | `/extrusion/toolpath`          | wing perimeters and spars               | slicer           |
+//! | `/emitter/log`                 | each program (job, profile, dialect, lines, SHA-256) and each refused toolpath | emitter |
 //! | `/machine/<id>/position`       | streamed machine position               | machine_bridge   |
 //! | `/monitor/<topic>`             | whatever the monitor node received      | monitor          |
 //!
