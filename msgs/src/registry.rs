@@ -251,7 +251,9 @@ mod tests {
         let response = definition("cell_msgs/srv/EmitProgram_Response").expect("response");
         assert!(
             response.starts_with("# Whether a program was emitted")
-                && response.trim_end().ends_with("cell_msgs/MachineProgram program"),
+                && response
+                    .trim_end()
+                    .ends_with("cell_msgs/MachineProgram program"),
             "{response}"
         );
         assert!(definition("cell_msgs/srv/EmitProgram").is_none());
