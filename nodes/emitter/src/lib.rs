@@ -1,5 +1,6 @@
 //! `cell_emitter`: turns a `Toolpath` into a `MachineProgram` for a machine profile.
 //!
+//! - [`arcs`]: G2/G3 arc fitting within a tolerance.
 //! - [`gcode`]: G-code for the profile's dialect (`cell_profiles::GcodeSettings`): axis words,
 //!   decimals, G94 or G93 inverse-time feeds, power words, pre-heat dwell, start and end lines.
 //! - [`rapid`]: ABB RAPID modules (`.mod`) and program files (`.pgf`) for a robot profile.
@@ -11,6 +12,7 @@
 
 #![warn(missing_docs)]
 
+pub mod arcs;
 pub mod gcode;
 pub mod program;
 pub mod rapid;
@@ -113,6 +115,26 @@ pub enum EmitError {
         point: usize,
         /// The feed given.
         feed_mm_s: f32,
+    },
+    /// A negative power (current, laser power or flow).
+    #[error("segment {segment} point {point}: power {power} must be >= 0")]
+    Power {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// The power given.
+        power: f32,
+    },
+    /// A program line longer than the controller accepts.
+    #[error("program line {line} has {length} characters; the controller takes at most {limit}")]
+    LineTooLong {
+        /// 1-based line number in the program.
+        line: usize,
+        /// Its length.
+        length: usize,
+        /// The dialect's limit.
+        limit: usize,
     },
     /// Per-point arrays of a segment with the wrong length.
     #[error("segment {segment}: {what} has {found} entries, the segment has {expected} points")]

@@ -626,7 +626,19 @@ impl MachineProfile {
                     }
                 }
             }
+            if g.dialect == Dialect::Marlin && g.feed_mode == FeedMode::InverseTime {
+                return Err(invalid(
+                    "gcode.feed_mode",
+                    "Marlin has no inverse-time feed (G93); use units_per_minute".into(),
+                ));
+            }
             if let Some(e) = &g.extrusion {
+                if g.power.is_some() {
+                    return Err(invalid(
+                        "gcode.extrusion",
+                        "an extrusion profile's power is the flow: remove the power section".into(),
+                    ));
+                }
                 if !self.axes.contains_key(&e.axis) {
                     return Err(invalid(
                         "gcode.extrusion.axis",
