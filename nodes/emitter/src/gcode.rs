@@ -3,7 +3,8 @@
 //! **Program layout.** A header comment; the modal line the emitter derives from the settings
 //! (plane, units, absolute mode, feed mode; `M82`/`M83` for extrusion); the profile's start
 //! lines; the moves; power off; `G94` after an inverse-time program; the end lines; `M2`
-//! (not on Marlin, which has no program end word).
+//! unless the end lines already end the program with M2 or M30 (not on Marlin, which has no
+//! program end word).
 //!
 //! **Segments.** Travel segments are rapids (G0). Cut, lead and deposit segments are feed
 //! moves (G1, or G2/G3 where arcs are fitted); zero-length moves, as where segments meet, are
@@ -696,7 +697,15 @@ impl<'a> Writer<'a> {
             self.lines
                 .push(fill_template(line, job_id, &self.profile.name));
         }
-        if self.g.dialect != Dialect::Marlin {
+        let ends_program = |l: &String| {
+            let word = l
+                .split_whitespace()
+                .next()
+                .unwrap_or_default()
+                .to_ascii_uppercase();
+            ["M2", "M02", "M30"].contains(&word.as_str())
+        };
+        if self.g.dialect != Dialect::Marlin && !self.lines.last().is_some_and(ends_program) {
             self.push("M2".into());
         }
         let limit = max_line_length(self.g.dialect);

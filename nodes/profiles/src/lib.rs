@@ -27,8 +27,28 @@ pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
         include_str!("../../../config/machines/grbl-xy.yaml"),
     ),
     (
+        "grbl-xyuv",
+        include_str!("../../../config/machines/grbl-xyuv.yaml"),
+    ),
+    (
+        "mach3-xyab",
+        include_str!("../../../config/machines/mach3-xyab.yaml"),
+    ),
+    (
         "linuxcnc-xyuv",
         include_str!("../../../config/machines/linuxcnc-xyuv.yaml"),
+    ),
+    (
+        "grbl-laser",
+        include_str!("../../../config/machines/grbl-laser.yaml"),
+    ),
+    (
+        "linuxcnc-plasma",
+        include_str!("../../../config/machines/linuxcnc-plasma.yaml"),
+    ),
+    (
+        "marlin-extruder",
+        include_str!("../../../config/machines/marlin-extruder.yaml"),
     ),
 ];
 
