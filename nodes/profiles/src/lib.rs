@@ -124,6 +124,15 @@ pub struct HotwireGeometry {
     pub wire: String,
     /// The wire supply's current range [min, max], A.
     pub supply_a: [f64; 2],
+    /// Axis letters of the second (UV) carriage: `[U, V]` (the default), or e.g. `[A, B]` on a
+    /// Mach3 or GRBL board that drives the far tower on A and B. A machine without these axes
+    /// is a 2-axis cutter.
+    #[serde(default = "default_uv_axes")]
+    pub uv_axes: [char; 2],
+}
+
+fn default_uv_axes() -> [char; 2] {
+    ['U', 'V']
 }
 
 /// One machine (module docs).
@@ -520,11 +529,23 @@ impl MachineProfile {
                     ));
                 }
             }
-            if self.axes.contains_key(&'U') != self.axes.contains_key(&'V') {
+            let [u, v] = h.uv_axes;
+            if self.axes.contains_key(&u) != self.axes.contains_key(&v) {
                 return Err(invalid(
                     "axes",
-                    "a 4-axis hot-wire machine needs both U and V".into(),
+                    format!("a 4-axis hot-wire machine needs both {u} and {v} (hotwire.uv_axes)"),
                 ));
+            }
+            if let Some(g) = &self.gcode {
+                let words = (g.axis_words.u, g.axis_words.v);
+                if self.axes.contains_key(&u) && words != (Some(u), Some(v)) {
+                    return Err(invalid(
+                        "gcode.axis_words",
+                        format!(
+                            "the second carriage is on {u} {v} (hotwire.uv_axes): u: {u}, v: {v}"
+                        ),
+                    ));
+                }
             }
             if !(h.tower_separation_mm.is_finite() && h.tower_separation_mm > 0.0) {
                 return Err(invalid(
@@ -718,7 +739,13 @@ impl MachineProfile {
 
     /// True for a hot-wire machine with a UV carriage (tapered panels possible).
     pub fn is_four_axis_hotwire(&self) -> bool {
-        self.hotwire.is_some() && self.axes.contains_key(&'U')
+        self.second_carriage_axes().is_some()
+    }
+
+    /// The second (UV) carriage's axis letters on a 4-axis hot-wire machine.
+    pub fn second_carriage_axes(&self) -> Option<[char; 2]> {
+        let h = self.hotwire.as_ref()?;
+        self.axes.contains_key(&h.uv_axes[0]).then_some(h.uv_axes)
     }
 
     /// Checks one position given as (axis, value) pairs against the travel. Axes the machine
@@ -832,7 +859,11 @@ mod tests {
         );
         let text = base().replace("u: U, v: V", "u: W, v: V");
         let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
-        assert!(e.to_string().contains("gcode.axis_words.u: axis W"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("gcode.axis_words: the second carriage is on U V"),
+            "{e}"
+        );
         let text = base().replace("u: U, v: V", "u: U");
         let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
         assert!(e.to_string().contains("gcode.axis_words:"), "{e}");
