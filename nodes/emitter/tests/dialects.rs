@@ -159,3 +159,27 @@ fn extrusion_pushes_the_filament_the_flow_needs_and_retracts_around_travel() {
         assert!(program.contains("M83") == (mode == "relative"));
     }
 }
+
+#[test]
+fn a_hostile_job_id_cannot_add_a_command_in_any_dialect() {
+    let hostile = "x)\nM3 S9999 (\r; G0 X0 %\n{profile}";
+    for (name, tp) in common::dialect_samples() {
+        let profile = MachineProfile::resolve(name).unwrap();
+        let clean = gcode::emit(&tp, &profile, "x").unwrap();
+        let text = gcode::emit(&tp, &profile, hostile).unwrap();
+        assert_eq!(text.lines().count(), clean.lines().count(), "{name}");
+        assert!(
+            !text.contains("S9999\n") && !text.contains('%'),
+            "{name}: {text}"
+        );
+        // Only the comment and the {job} templates differ.
+        for (a, b) in text.lines().zip(clean.lines()) {
+            if a != b {
+                assert!(
+                    a.starts_with('(') || a.starts_with(';') || a.starts_with("M117"),
+                    "{name}: {a}"
+                );
+            }
+        }
+    }
+}

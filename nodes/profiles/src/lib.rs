@@ -872,6 +872,93 @@ mod tests {
         assert!(e.to_string().contains("feed_mode"), "{e}");
     }
 
+    fn embedded(name: &str) -> String {
+        EMBEDDED_PROFILES
+            .iter()
+            .find(|(n, _)| *n == name)
+            .unwrap()
+            .1
+            .to_string()
+    }
+
+    #[test]
+    fn process_settings_are_checked_and_name_their_field() {
+        for (profile, from, to, field) in [
+            (
+                "linuxcnc-plasma",
+                "program_start: [\"G64 P0.05\"]",
+                "program_start: [\"G64 P0.05\", \"G91\"]",
+                "gcode.program_start[1]",
+            ),
+            (
+                "linuxcnc-plasma",
+                "program_start: [\"G64 P0.05\"]",
+                "program_start: [\"(job {jobid})\"]",
+                "gcode.program_start[0]",
+            ),
+            ("linuxcnc-plasma", "z_pierce_mm: 3.8, ", "", "gcode.pierce"),
+            (
+                "linuxcnc-plasma",
+                "z_travel_mm: 10.0",
+                "z_travel_mm: 150.0",
+                "gcode.pierce.z_travel_mm",
+            ),
+            (
+                "grbl-laser",
+                "arc_tolerance_mm: 0.01",
+                "arc_tolerance_mm: 0",
+                "gcode.arc_tolerance_mm",
+            ),
+            (
+                "linuxcnc-xyuv",
+                "preheat_dwell_s: 2.0",
+                "preheat_dwell_s: 2.0\n  arc_tolerance_mm: 0.01",
+                "gcode.arc_tolerance_mm",
+            ),
+            (
+                "marlin-extruder",
+                "feed_mode: units_per_minute",
+                "feed_mode: inverse_time",
+                "gcode.feed_mode",
+            ),
+            (
+                "marlin-extruder",
+                "filament_diameter_mm: 1.75",
+                "filament_diameter_mm: -1.75",
+                "gcode.extrusion.filament_diameter_mm",
+            ),
+            (
+                "marlin-extruder",
+                "  arc_tolerance_mm: 0.01",
+                "  arc_tolerance_mm: 0.01\n  power: {on: M3, off: M5, s_per_unit: 1.0}",
+                "gcode.extrusion",
+            ),
+            ("mach3-xyab", "uv_axes: [A, B]", "uv_axes: [A, C]", "axes"),
+        ] {
+            let text = embedded(profile).replace(from, to);
+            assert_ne!(text, embedded(profile), "{from}");
+            let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+            assert!(
+                matches!(&e, ProfileError::Invalid { field: f, .. } if f == field),
+                "{profile} {to}: {e}"
+            );
+        }
+        // Placeholders and the arc-centre mode word are fine in templates; G91 inside a comment too.
+        let text = embedded("linuxcnc-plasma").replace(
+            "program_start: [\"G64 P0.05\"]",
+            "program_start: [\"(job {job} on {profile}, not G91)\", \"G91.1\"]",
+        );
+        MachineProfile::from_yaml_str(&text, "m.yaml").unwrap();
+        // A mistyped key in a nested section names it with its line.
+        let text = embedded("marlin-extruder").replace("retract_mm:", "retract:");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        assert!(
+            matches!(e, ProfileError::Parse { line: Some(_), .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("retract"), "{e}");
+    }
+
     #[test]
     fn envelope_check_names_the_axis() {
         let p = MachineProfile::resolve("linuxcnc-xyuv").unwrap();
