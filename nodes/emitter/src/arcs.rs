@@ -4,14 +4,16 @@
 //! polylines but none fits arcs to a point sequence; the ArcWelder-style greedy fit below is
 //! short.
 //!
-//! **Greedy fit.** From point `i`, the run `i..=j` grows while the circle through points `i`,
+//! **Greedy fit.** From point `i`, the run `i..=j` grows (doubling, then bisecting: O(L log L)
+//! for an arc of L points) while the circle through points `i`,
 //! `(i + j) / 2` and `j` (the circumcircle) keeps
 //! - every point of the run within `tolerance` of the circle (radial error),
 //! - every chord within `tolerance` of the arc (sagitta r − √(r² − (c/2)²)), so the arc never
 //!   strays from the polyline it replaces by more than `tolerance`,
 //! - the points turning one way round the centre, each step under 90° and the whole run
 //!   under 350° (a full circle is written as two arcs, never one ambiguous one),
-//! - a radius under [`MAX_RADIUS_MM`] (beyond that the run is straight for any controller).
+//! - a radius under [`MAX_RADIUS_MM`] (beyond that the run is straight for any controller),
+//! - at most [`MAX_ARC_POINTS`] points.
 //!
 //! A run of at least three points that passes becomes an arc; otherwise the next point is a
 //! straight move.
@@ -20,6 +22,9 @@ use nalgebra::Vector2;
 
 /// Radii above this are left as straight moves (mm).
 pub const MAX_RADIUS_MM: f64 = 5000.0;
+
+/// Most points one arc may replace (bounds the work per arc on a long, finely sampled curve).
+pub const MAX_ARC_POINTS: usize = 2000;
 
 /// One move of a fitted polyline, ending at point index `end`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,11 +51,35 @@ pub fn fit(points: &[Vector2<f64>], tolerance: f64) -> Vec<Primitive> {
     let mut out = Vec::new();
     let mut i = 0;
     while i + 1 < points.len() {
+        // Galloping search for the longest run that passes: double the run while it passes,
+        // then bisect between the last pass and the first failure. Each candidate is checked
+        // whole, so whatever is chosen passes every test.
+        let last = (points.len() - 1).min(i + MAX_ARC_POINTS - 1);
         let mut best = None;
-        for j in i + 2..points.len() {
-            match arc_through(&points[i..=j], tolerance) {
-                Some(arc) => best = Some((j, arc)),
-                None => break,
+        let mut step = 2;
+        let mut fail = None;
+        while i + step <= last {
+            match arc_through(&points[i..=i + step], tolerance) {
+                Some(arc) => best = Some((i + step, arc)),
+                None => {
+                    fail = Some(i + step);
+                    break;
+                }
+            }
+            step *= 2;
+        }
+        if let Some((good, _)) = best {
+            let mut hi = fail.unwrap_or(last + 1);
+            let mut lo = good;
+            while hi - lo > 1 {
+                let mid = (lo + hi) / 2;
+                match arc_through(&points[i..=mid], tolerance) {
+                    Some(arc) => {
+                        best = Some((mid, arc));
+                        lo = mid;
+                    }
+                    None => hi = mid,
+                }
             }
         }
         match best {
