@@ -23,6 +23,14 @@ pub use rapid::RapidSettings;
 /// The profiles shipped in `config/machines/`, compiled in: (name, YAML text).
 pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
     (
+        "abb-irb1600-rw7-do",
+        include_str!("../../../config/machines/abb-irb1600-rw7-do.yaml"),
+    ),
+    (
+        "abb-irb2600-waam",
+        include_str!("../../../config/machines/abb-irb2600-waam.yaml"),
+    ),
+    (
         "grbl-xy",
         include_str!("../../../config/machines/grbl-xy.yaml"),
     ),
