@@ -414,6 +414,70 @@ fn cell_emit_writes_the_program_and_refuses_bad_input_without_writing() {
 }
 
 #[test]
+fn cell_emit_writes_every_file_of_a_rapid_program_under_its_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |x: f64| Point {
+        x,
+        y: 100.0,
+        z: 10.0,
+    };
+    let wall = Toolpath {
+        job_id: "wall".into(),
+        process: Toolpath::PROCESS_WAAM,
+        power_unit: Toolpath::POWER_ARC_ON,
+        segments: vec![ToolpathSegment {
+            kind: ToolpathSegment::KIND_DEPOSIT,
+            points: vec![p(100.0), p(150.0), p(200.0)],
+            feed_mm_s: vec![8.0; 3],
+            ..Default::default()
+        }],
+        ..Default::default()
+    };
+    let json = dir.path().join("wall.json");
+    write_json(&json, &wall);
+    let expected = cell_emitter::emit_program(
+        &wall,
+        &MachineProfile::resolve("abb-irb2600-waam").unwrap(),
+        "wall",
+    )
+    .unwrap();
+    let names: Vec<&str> = expected.files.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["WAAM_wall.mod", "WAAM_wall.pgf"]);
+    let emit = |out: &std::path::Path| {
+        cell(&[
+            "emit".as_ref(),
+            "--toolpath".as_ref(),
+            json.as_os_str(),
+            "--profile".as_ref(),
+            "abb-irb2600-waam".as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ])
+    };
+
+    // Renaming the main module would break the .pgf that lists it: refused, nothing written.
+    let out = dir.path().join("robot");
+    let run = emit(&out.join("wall.mod"));
+    assert_eq!(run.status.code(), Some(64), "{}", stderr(&run));
+    let line = error_line(&run);
+    assert!(
+        line.contains("WAAM_wall.mod") && line.contains("DIR/"),
+        "{line}"
+    );
+    assert!(!out.exists());
+
+    // A directory, or the main module's own name: every file under its own name.
+    for target in [out.join(""), out.join("WAAM_wall.mod")] {
+        let run = emit(&target);
+        assert!(run.status.success(), "{}", stderr(&run));
+        for f in &expected.files {
+            assert_eq!(std::fs::read_to_string(out.join(&f.name)).unwrap(), f.text);
+        }
+        assert!(String::from_utf8_lossy(&run.stdout).contains("dialect rapid"));
+    }
+}
+
+#[test]
 fn cell_hotwire_with_a_profile_writes_the_program_and_the_toolpath() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
@@ -475,7 +539,19 @@ fn cell_hotwire_with_a_profile_writes_the_program_and_the_toolpath() {
     assert!(emit.status.success(), "{}", stderr(&emit));
     assert_eq!(std::fs::read_to_string(&again).unwrap(), program);
 
-    // A profile that takes no program, or none at all: refused before planning.
+    // The example: a 4-axis GRBL cutter plans and emits in inverse-time feeds.
+    let hotwire = run(args("grbl-xyuv"));
+    assert!(hotwire.status.success(), "{}", stderr(&hotwire));
+    let program = std::fs::read_to_string(out.join("program.ngc")).unwrap();
+    assert!(
+        program.contains("profile grbl-xyuv") && program.contains("G93"),
+        "{program}"
+    );
+    assert!(program
+        .lines()
+        .any(|l| l.contains(" U") && l.contains(" V")));
+
+    // A profile that is not known: refused before planning.
     let run_bad = run(args("mill_9000"));
     assert_eq!(run_bad.status.code(), Some(64));
     let line = error_line(&run_bad);

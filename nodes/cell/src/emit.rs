@@ -5,11 +5,13 @@
 //! for `--profile`, and writes the program atomically:
 //!
 //! - `--out FILE`: the program's first file (the G-code file, or the RAPID main module) at
-//!   FILE; any other files of the program (RAPID) beside it, in FILE's directory, under their
-//!   own names. Missing directories are created.
+//!   FILE; any other files of the program (RAPID part modules and the `.pgf`) beside it, in
+//!   FILE's directory, under their own names. Those files refer to each other by name (the
+//!   `.pgf` lists the modules), so for a multi-file program FILE must carry the main file's
+//!   own name (e.g. `out/WAAM_job42.mod`); another name is a usage error and nothing is
+//!   written. Missing directories are created.
 //! - `--out DIR/` (an existing directory, or a path ending in `/`): every file in DIR under
-//!   its own name (`<job>.ngc` for G-code). Use this for RAPID when a program file (`.pgf`)
-//!   lists the modules by name.
+//!   its own name (`<job>.ngc` for G-code).
 //!
 //! Prints one line: job, profile, dialect, line count, SHA-256 and the files written.
 //!
@@ -39,8 +41,9 @@ pub struct EmitArgs {
     #[arg(long, value_name = "NAME|FILE")]
     pub profile: String,
     /// Where the program goes: FILE for its first (main) file, any others beside it under
-    /// their own names; or DIR/ (existing, or ending in /) for every file under its own name
-    /// (best for RAPID, whose .pgf lists its modules by name).
+    /// their own names (a multi-file RAPID program's FILE must then carry the main module's
+    /// own name, which its .pgf lists); or DIR/ (existing, or ending in /) for every file
+    /// under its own name.
     #[arg(long, value_name = "FILE|DIR/")]
     pub out: PathBuf,
     /// Job id for the program's header and file names (default: the toolpath's job_id, else
@@ -123,6 +126,18 @@ pub fn run(a: EmitArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return bad_data(format!("{}: {e}", a.toolpath.display())),
     };
+    if let (Some(path), [first, _, ..]) = (&main, program.files.as_slice()) {
+        if path.file_name() != Some(std::ffi::OsStr::new(&first.name)) {
+            return usage(format!(
+                "--out {}: the program has {} files that refer to each other by name (main file \
+                 {}); give a directory (--out DIR/) or --out DIR/{}",
+                path.display(),
+                program.files.len(),
+                first.name,
+                first.name
+            ));
+        }
+    }
     if let Err(e) = std::fs::create_dir_all(&dir) {
         eprintln!("error: --out: cannot create {}: {e}", dir.display());
         return ExitCode::FAILURE;

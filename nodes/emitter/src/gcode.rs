@@ -1,29 +1,56 @@
 //! G-code from a `Toolpath` for a profile's dialect.
 //!
-//! The program is: a header comment, the profile's start lines, a rapid (G0) to the first
-//! point, power on with the first point's value and the pre-heat dwell, one G1 per point that
-//! moves (zero-length moves where segments meet are dropped), power off, the end lines and M2.
+//! **Program layout.** A header comment; the modal line the emitter derives from the settings
+//! (plane, units, absolute mode, feed mode; `M82`/`M83` for extrusion); the profile's start
+//! lines; the moves; power off; `G94` after an inverse-time program; the end lines; `M2`
+//! unless the end lines already end the program with M2 or M30 (not on Marlin, which has no
+//! program end word).
 //!
-//! **Feeds.** G94: F = feed × 60 (mm/min). G93 (inverse time): F = 1 / duration in minutes,
-//! with the duration max(‖ΔXY‖, ‖ΔUV‖) / feed: the `Toolpath` feed of a 4-axis hot-wire point is
-//! the speed of the carriage that moves farther, so both carriages finish the move together.
+//! **Segments.** Travel segments are rapids (G0). Cut, lead and deposit segments are feed
+//! moves (G1, or G2/G3 where arcs are fitted); zero-length moves, as where segments meet, are
+//! dropped. How power is switched depends on the profile:
+//! - *continuous* (hot-wire; no `pierce`): power on with the first point's value and the
+//!   pre-heat dwell before the first feed move, off after the last;
+//! - *pierce* (sheet cutting): for each cut, power on, pierce dwell, cut, power off at the next
+//!   travel; with pierce heights the head goes to the pierce height for the pierce, down to the
+//!   cut height for the cut and up to the travel height for travel moves;
+//! - *extrusion* (printing): no power words; deposit moves carry E (below), travel moves are
+//!   wrapped in a retract and a Z-hop.
 //!
-//! **Power.** `S` = power × `s_per_unit`, written on the power-on line and again on any G1 whose
-//! rounded value differs from the last one written.
+//! **Feeds.** G94: F = feed × 60 (mm/min), written when it changes. G93 (inverse time):
+//! F = 1 / duration in minutes on every feed move, with the duration max(‖ΔXY‖, ‖ΔUV‖) / feed:
+//! the `Toolpath` feed of a 4-axis hot-wire point is the speed of the carriage that moves
+//! farther, so both carriages finish the move together.
+//!
+//! **Power.** `S` = power × `s_per_unit`, written on the power-on line and again on any move
+//! whose rounded value differs from the last one written.
+//!
+//! **Extrusion.** A deposit move's `power` is the volumetric flow q (mm³/s), so it pushes
+//! E = q · (length / feed) / (π d² / 4) of filament of diameter d: absolute (M82, running
+//! total) or relative (M83).
+//!
+//! **Arcs.** With `arc_tolerance_mm`, runs of feed moves with one feed, power and height that
+//! lie on a circle are written as G2/G3 with incremental I, J ([`crate::arcs`]).
 //!
 //! **Axes.** Primary x, y (and z where the profile maps it) and secondary x, y as the profile's
-//! u, v letters. A toolpath without secondary points on a 4-axis profile is a straight cut:
-//! both carriages follow the primary points. Secondary points on a profile without u, v are
-//! accepted only when they equal the primary ones.
+//! u, v letters (`U V` or `A B`). A toolpath without secondary points on a 4-axis profile is a
+//! straight cut: both carriages follow the primary points. Secondary points on a profile
+//! without u, v are accepted only when they equal the primary ones. With `units: inch` every
+//! length is divided by 25.4.
 //!
-//! **User text** (the job id) goes only into the header comment, reduced to a safe character
-//! set, so no text can close the comment and inject a command.
+//! **User text** (the job id) goes only into comments and `{job}` template placeholders,
+//! reduced to a safe character set, so no text can close a comment and inject a command.
+//!
+//! **Line length.** GRBL buffers at most 80 characters of a line and Marlin 96; lines longer
+//! than the dialect's limit are an error (the header comment is shortened to fit).
 
 use std::fmt::Write as _;
 
 use cell_msgs::{Toolpath, ToolpathSegment};
-use cell_profiles::{Dialect, FeedMode, GcodeSettings, MachineProfile, Units};
+use cell_profiles::{Dialect, ExtrusionMode, FeedMode, GcodeSettings, MachineProfile, Units};
+use nalgebra::Vector2;
 
+use crate::arcs::{self, Primitive};
 use crate::EmitError;
 
 /// One checked point of the program.
@@ -33,9 +60,26 @@ struct Pose {
     secondary: [f64; 2],
     feed_mm_s: f64,
     power: f64,
-    travel: bool,
+    kind: u8,
     segment: usize,
     point: usize,
+}
+
+impl Pose {
+    fn xy(&self) -> Vector2<f64> {
+        Vector2::new(self.primary[0], self.primary[1])
+    }
+}
+
+/// The longest line each dialect's controller accepts (characters, without the newline):
+/// GRBL's 80-byte line buffer (`LINE_BUFFER_SIZE`, its terminator included), Marlin's
+/// `MAX_CMD_SIZE` 96, LinuxCNC's `LINELEN` 255; Mach3 is given LinuxCNC's.
+pub fn max_line_length(dialect: Dialect) -> usize {
+    match dialect {
+        Dialect::Grbl => 79,
+        Dialect::Marlin => 95,
+        Dialect::Linuxcnc | Dialect::Mach3 => 255,
+    }
 }
 
 /// The G-code program for `toolpath` on `profile` (module docs). `job_id` goes into the header
@@ -44,7 +88,7 @@ struct Pose {
 /// # Errors
 /// A profile without a `gcode` section; a non-finite value, a feed ≤ 0 or a per-point array of
 /// the wrong length (naming segment and point); an axis the profile does not map; a position
-/// outside the machine's travel.
+/// outside the machine's travel; a line longer than the dialect allows.
 pub fn emit(
     toolpath: &Toolpath,
     profile: &MachineProfile,
@@ -58,75 +102,16 @@ pub fn emit(
             section: "gcode",
         })?;
     let poses = poses(toolpath, profile, g)?;
-    let mut out = String::new();
-    let comment = |text: &str| match g.dialect {
-        Dialect::Marlin => format!("; {text}"),
-        _ => format!("({text})"),
-    };
-    let _ = writeln!(
-        out,
-        "{}",
-        comment(&format!(
-            "cellsuite emitter: job {}, profile {}",
-            sanitise(job_id),
-            sanitise(&profile.name)
-        ))
-    );
-    let _ = writeln!(out, "{}", modal_line(g));
-    for line in &g.program_start {
-        let _ = writeln!(out, "{}", fill_template(line, job_id, &profile.name));
-    }
-    let Some(first) = poses.first() else {
-        let _ = writeln!(out, "M2");
-        return Ok(out);
-    };
-    let _ = writeln!(out, "G0 {}", axes(g, first));
-    let mut last_s = None;
-    if let Some(p) = &g.power {
-        let s = s_value(g, first.power);
-        let _ = writeln!(out, "{} S{s}", p.on);
-        last_s = Some(s);
-        if g.preheat_dwell_s > 0.0 {
-            let _ = writeln!(out, "{}", dwell(g.dialect, g.preheat_dwell_s));
+    let mut w = Writer::new(profile, g);
+    w.start(job_id);
+    for run in poses.chunk_by(|a, b| a.segment == b.segment) {
+        match run[0].kind {
+            ToolpathSegment::KIND_TRAVEL => w.travel(run)?,
+            ToolpathSegment::KIND_DEPOSIT if g.extrusion.is_some() => w.deposit(run)?,
+            _ => w.powered(run)?,
         }
     }
-    let mut at = *first;
-    for pose in &poses[1..] {
-        if same_place(&at, pose, g.decimals) {
-            continue;
-        }
-        let mut line = format!(
-            "{} {}",
-            if pose.travel { "G0" } else { "G1" },
-            axes(g, pose)
-        );
-        if !pose.travel {
-            let _ = write!(line, " F{}", feed_word(g, &at, pose));
-        }
-        if g.power.is_some() {
-            let s = s_value(g, pose.power);
-            if last_s.as_ref() != Some(&s) {
-                let _ = write!(line, " S{s}");
-                last_s = Some(s);
-            }
-        }
-        let _ = writeln!(out, "{line}");
-        at = *pose;
-    }
-    if let Some(p) = &g.power {
-        let _ = writeln!(out, "{}", p.off);
-    }
-    if g.feed_mode == FeedMode::InverseTime {
-        // Leave the controller in the usual mode for whatever is run next.
-        let _ = writeln!(out, "G94");
-    }
-    for line in &g.program_end {
-        let _ = writeln!(out, "{}", fill_template(line, job_id, &profile.name));
-    }
-    if g.dialect != Dialect::Marlin {
-        let _ = writeln!(out, "M2");
-    }
-    Ok(out)
+    w.finish(job_id)
 }
 
 /// Checks every segment and flattens it into poses.
@@ -181,90 +166,575 @@ fn poses(
                     feed_mm_s: seg.feed_mm_s[pi],
                 });
             }
+            if power < 0.0 {
+                return Err(EmitError::Power {
+                    segment: si,
+                    point: pi,
+                    power: seg.power[pi],
+                });
+            }
             if w.u.is_none() && (s.x != p.x || s.y != p.y) {
                 return Err(EmitError::NoAxis {
                     profile: profile.name.clone(),
                     what: "the secondary (UV) carriage",
                 });
             }
-            let pose = Pose {
+            out.push(Pose {
                 primary: [p.x, p.y, p.z],
                 secondary: [s.x, s.y],
                 feed_mm_s: feed,
                 power,
-                travel: seg.kind == ToolpathSegment::KIND_TRAVEL,
+                kind: seg.kind,
                 segment: si,
                 point: pi,
-            };
-            profile
-                .check_position(&positions(g, &pose))
-                .map_err(|violation| EmitError::Envelope {
-                    segment: si,
-                    point: pi,
-                    violation,
-                })?;
-            out.push(pose);
+            });
         }
     }
     Ok(out)
 }
 
-/// (axis letter, value) pairs a pose writes.
-fn positions(g: &GcodeSettings, p: &Pose) -> Vec<(char, f64)> {
-    let w = &g.axis_words;
-    let mut out = vec![(w.x, p.primary[0]), (w.y, p.primary[1])];
-    if let Some(z) = w.z {
-        out.push((z, p.primary[2]));
-    }
-    if let (Some(u), Some(v)) = (w.u, w.v) {
-        out.push((u, p.secondary[0]));
-        out.push((v, p.secondary[1]));
-    }
-    out
+/// How a move writes the z axis word.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ZWord {
+    /// The pose's own z (if the profile maps z).
+    Pose,
+    /// The pose's z plus a lift (extrusion Z-hop).
+    Lifted(f64),
+    /// Not written (pierce heights own the z axis; XY moves leave it).
+    Omit,
 }
 
-fn axes(g: &GcodeSettings, p: &Pose) -> String {
-    positions(g, p)
-        .iter()
-        .map(|(letter, v)| format!("{letter}{}", number(*v, g.decimals)))
-        .collect::<Vec<_>>()
-        .join(" ")
+/// The program being written, with the modal state it has set so far.
+struct Writer<'a> {
+    profile: &'a MachineProfile,
+    g: &'a GcodeSettings,
+    lines: Vec<String>,
+    /// Where the last move ended, and the coordinate words written for it.
+    at: Option<(Pose, String)>,
+    power_on: bool,
+    last_s: Option<String>,
+    last_f: Option<String>,
+    /// Extruder: running E position (absolute mode), and whether the filament is pulled back.
+    e_position: f64,
+    retracted: bool,
+    /// Extrusion Z-hop in force (the nozzle is lifted by this much).
+    lift: Option<f64>,
 }
 
-/// True if `b` writes the same coordinates as `a` (a zero-length move once rounded).
-fn same_place(a: &Pose, b: &Pose, decimals: usize) -> bool {
-    let r = |v: f64| number(v, decimals);
-    a.primary
-        .iter()
-        .zip(&b.primary)
-        .all(|(x, y)| r(*x) == r(*y))
-        && a.secondary
-            .iter()
-            .zip(&b.secondary)
-            .all(|(x, y)| r(*x) == r(*y))
-}
-
-/// The F word for the move from `a` to `b` (module docs).
-fn feed_word(g: &GcodeSettings, a: &Pose, b: &Pose) -> String {
-    match g.feed_mode {
-        FeedMode::UnitsPerMinute => number(b.feed_mm_s * 60.0, 3),
-        FeedMode::InverseTime => {
-            let dp = ((b.primary[0] - a.primary[0]).powi(2)
-                + (b.primary[1] - a.primary[1]).powi(2)
-                + (b.primary[2] - a.primary[2]).powi(2))
-            .sqrt();
-            let ds = if g.axis_words.u.is_some() {
-                ((b.secondary[0] - a.secondary[0]).powi(2)
-                    + (b.secondary[1] - a.secondary[1]).powi(2))
-                .sqrt()
-            } else {
-                0.0
-            };
-            let minutes = dp.max(ds) / b.feed_mm_s / 60.0;
-            // Enough significant digits that F × duration stays 1 to 1e-6 for short moves.
-            number(1.0 / minutes, 4)
+impl<'a> Writer<'a> {
+    fn new(profile: &'a MachineProfile, g: &'a GcodeSettings) -> Self {
+        Self {
+            profile,
+            g,
+            lines: Vec::new(),
+            at: None,
+            power_on: false,
+            last_s: None,
+            last_f: None,
+            e_position: 0.0,
+            retracted: false,
+            lift: None,
         }
     }
+
+    fn push(&mut self, line: String) {
+        self.lines.push(line);
+    }
+
+    fn comment(&self, text: &str) -> String {
+        // Shortened so the line fits the dialect's limit.
+        let room = max_line_length(self.g.dialect) - 2;
+        let text: String = text.chars().take(room).collect();
+        match self.g.dialect {
+            Dialect::Marlin => format!("; {text}"),
+            _ => format!("({text})"),
+        }
+    }
+
+    /// Pierce heights (pierce, cut, travel), when the profile sets them.
+    fn heights(&self) -> Option<(f64, f64, f64)> {
+        let p = self.g.pierce.as_ref()?;
+        Some((p.z_pierce_mm?, p.z_cut_mm?, p.z_travel_mm?))
+    }
+
+    fn default_z(&self) -> ZWord {
+        if self.heights().is_some() {
+            ZWord::Omit
+        } else if let Some(hop) = self.lift {
+            ZWord::Lifted(hop)
+        } else {
+            ZWord::Pose
+        }
+    }
+
+    /// A length in program units.
+    fn len(&self, mm: f64) -> f64 {
+        match self.g.units {
+            Units::Mm => mm,
+            Units::Inch => mm / 25.4,
+        }
+    }
+
+    fn coord(&self, mm: f64) -> String {
+        number(self.len(mm), self.g.decimals)
+    }
+
+    /// The axis words of `p`, after checking them against the travel.
+    fn words(&self, p: &Pose, z: ZWord) -> Result<String, EmitError> {
+        let w = &self.g.axis_words;
+        let mut values = vec![(w.x, p.primary[0]), (w.y, p.primary[1])];
+        if let Some(letter) = w.z {
+            match z {
+                ZWord::Pose => values.push((letter, p.primary[2])),
+                ZWord::Lifted(hop) => values.push((letter, p.primary[2] + hop)),
+                ZWord::Omit => {}
+            }
+        }
+        if let (Some(u), Some(v)) = (w.u, w.v) {
+            values.push((u, p.secondary[0]));
+            values.push((v, p.secondary[1]));
+        }
+        self.profile
+            .check_position(&values)
+            .map_err(|violation| EmitError::Envelope {
+                segment: p.segment,
+                point: p.point,
+                violation,
+            })?;
+        Ok(values
+            .iter()
+            .map(|(letter, v)| format!("{letter}{}", self.coord(*v)))
+            .collect::<Vec<_>>()
+            .join(" "))
+    }
+
+    fn start(&mut self, job_id: &str) {
+        let header = self.comment(&format!(
+            "cellsuite emitter: job {}, profile {}",
+            sanitise(job_id),
+            sanitise(&self.profile.name)
+        ));
+        self.push(header);
+        self.push(modal_line(self.g));
+        if let Some(e) = &self.g.extrusion {
+            self.push(
+                match e.mode {
+                    ExtrusionMode::Absolute => "M82",
+                    ExtrusionMode::Relative => "M83",
+                }
+                .into(),
+            );
+            if e.mode == ExtrusionMode::Absolute {
+                self.push(format!("G92 {}0", e.axis));
+            }
+        }
+        for line in &self.g.program_start {
+            self.lines
+                .push(fill_template(line, job_id, &self.profile.name));
+        }
+        if let (Some((_, _, travel)), Some(z)) = (self.heights(), self.g.axis_words.z) {
+            let line = format!("G0 {z}{}", self.coord(travel));
+            self.push(line);
+        }
+    }
+
+    /// A rapid to `p` unless already there.
+    fn rapid_to(&mut self, p: &Pose) -> Result<(), EmitError> {
+        let words = self.words(p, self.default_z())?;
+        if self.at.as_ref().is_some_and(|(_, w)| *w == words) {
+            return Ok(());
+        }
+        self.push(format!("G0 {words}"));
+        self.at = Some((*p, words));
+        Ok(())
+    }
+
+    /// The F word for a feed move of `primary_mm` / `secondary_mm` carriage travel at `p`'s
+    /// feed: `None` when G94 and unchanged.
+    fn feed_word(&mut self, primary_mm: f64, secondary_mm: f64, feed_mm_s: f64) -> Option<String> {
+        let word = match self.g.feed_mode {
+            FeedMode::UnitsPerMinute => number(self.len(feed_mm_s * 60.0), 3),
+            FeedMode::InverseTime => {
+                let minutes = primary_mm.max(secondary_mm) / feed_mm_s / 60.0;
+                // Enough significant digits that F × duration stays 1 to 1e-6 for short moves.
+                return Some(number(1.0 / minutes, 4));
+            }
+        };
+        if self.last_f.as_ref() == Some(&word) {
+            None
+        } else {
+            self.last_f = Some(word.clone());
+            Some(word)
+        }
+    }
+
+    /// The ` S…` suffix when power is on and its rounded value changed.
+    fn s_suffix(&mut self, power: f64) -> String {
+        if !self.power_on || self.g.power.is_none() {
+            return String::new();
+        }
+        let s = s_value(self.g, power);
+        if self.last_s.as_ref() == Some(&s) {
+            String::new()
+        } else {
+            self.last_s = Some(s.clone());
+            format!(" S{s}")
+        }
+    }
+
+    /// The ` E…` suffix of a deposit move of `length_mm` at `p`.
+    fn e_suffix(&mut self, p: &Pose, length_mm: f64, extrude: bool) -> String {
+        let Some(e) = self.g.extrusion.as_ref().filter(|_| extrude) else {
+            return String::new();
+        };
+        let area = std::f64::consts::PI * e.filament_diameter_mm.powi(2) / 4.0;
+        let filament = p.power * (length_mm / p.feed_mm_s) / area;
+        let value = match e.mode {
+            ExtrusionMode::Relative => filament,
+            ExtrusionMode::Absolute => {
+                self.e_position += filament;
+                self.e_position
+            }
+        };
+        format!(" {}{}", e.axis, number(self.len(value), 5))
+    }
+
+    /// A feed move to `p` (G1), or an arc (G2/G3) about `centre`.
+    fn feed_to(
+        &mut self,
+        p: &Pose,
+        arc: Option<(Vector2<f64>, bool)>,
+        extrude: bool,
+    ) -> Result<(), EmitError> {
+        let words = self.words(p, self.default_z())?;
+        let Some((from, from_words)) = self.at.clone() else {
+            self.push(format!("G0 {words}"));
+            self.at = Some((*p, words));
+            return Ok(());
+        };
+        if from_words == words {
+            return Ok(());
+        }
+        let secondary = if self.g.axis_words.u.is_some() {
+            (Vector2::from(p.secondary) - Vector2::from(from.secondary)).norm()
+        } else {
+            0.0
+        };
+        let (code, centre_words, primary) = match arc {
+            None => {
+                let z = if self.default_z() == ZWord::Omit {
+                    0.0
+                } else {
+                    p.primary[2] - from.primary[2]
+                };
+                let d = (p.xy() - from.xy()).norm();
+                ("G1", String::new(), (d * d + z * z).sqrt())
+            }
+            Some((centre, ccw)) => {
+                // The centre as the rounded ends need it, I and J from the (rounded) start.
+                let rounded = |v: Vector2<f64>| {
+                    let r = |c: f64| self.len(c);
+                    Vector2::new(
+                        round_to(r(v.x), self.g.decimals),
+                        round_to(r(v.y), self.g.decimals),
+                    )
+                };
+                let (s, e) = (rounded(from.xy()), rounded(p.xy()));
+                let c = arcs::centre_for_rounded_ends(
+                    s,
+                    e,
+                    Vector2::new(self.len(centre.x), self.len(centre.y)),
+                );
+                let ij = c - s;
+                let sweep = sweep(s - c, e - c, ccw);
+                let length_mm = (s - c).norm() * sweep * self.len(1.0).recip();
+                (
+                    if ccw { "G3" } else { "G2" },
+                    format!(
+                        " I{} J{}",
+                        number(ij.x, self.g.decimals),
+                        number(ij.y, self.g.decimals)
+                    ),
+                    length_mm,
+                )
+            }
+        };
+        let mut line = format!("{code} {words}{centre_words}");
+        if let Some(f) = self.feed_word(primary, secondary, p.feed_mm_s) {
+            let _ = write!(line, " F{f}");
+        }
+        line += &self.s_suffix(p.power);
+        line += &self.e_suffix(p, primary, extrude);
+        self.push(line);
+        self.at = Some((*p, words));
+        Ok(())
+    }
+
+    /// Feed moves through `run` (the current position first), arcs fitted where allowed.
+    fn moves_through(&mut self, run: &[Pose], extrude: bool) -> Result<(), EmitError> {
+        let Some(tolerance) = self.g.arc_tolerance_mm else {
+            for p in run {
+                self.feed_to(p, None, extrude)?;
+            }
+            return Ok(());
+        };
+        // Distinct points after the current one, grouped by what an arc must keep constant.
+        let mut distinct: Vec<Pose> = Vec::new();
+        let mut last = self.at.as_ref().map(|(_, w)| w.clone());
+        for p in run {
+            let w = self.words(p, self.default_z())?;
+            if last.as_ref() != Some(&w) {
+                distinct.push(*p);
+                last = Some(w);
+            }
+        }
+        let height_matters = self.default_z() != ZWord::Omit;
+        for group in distinct.chunk_by(|a, b| {
+            a.feed_mm_s == b.feed_mm_s
+                && a.power == b.power
+                && (!height_matters || a.primary[2] == b.primary[2])
+        }) {
+            let Some((from, _)) = self.at.clone() else {
+                for p in group {
+                    self.feed_to(p, None, extrude)?;
+                }
+                continue;
+            };
+            let same_height = !height_matters || from.primary[2] == group[0].primary[2];
+            if !same_height {
+                self.feed_to(&group[0], None, extrude)?;
+            }
+            let rest = if same_height { group } else { &group[1..] };
+            let mut points = vec![self.at.as_ref().map_or(from.xy(), |(p, _)| p.xy())];
+            points.extend(rest.iter().map(Pose::xy));
+            for primitive in arcs::fit(&points, tolerance) {
+                match primitive {
+                    Primitive::Line { end } => self.feed_to(&rest[end - 1], None, extrude)?,
+                    Primitive::Arc { end, centre, ccw } => {
+                        self.feed_to(&rest[end - 1], Some((centre, ccw)), extrude)?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn power_on(&mut self, first: &Pose) -> Result<(), EmitError> {
+        let Some(words) = self.g.power.clone() else {
+            return Ok(());
+        };
+        let z = self.g.axis_words.z;
+        let heights = self.heights();
+        if let (Some((pierce, _, _)), Some(z)) = (heights, z) {
+            let line = format!("G0 {z}{}", self.coord(pierce));
+            self.push(line);
+        }
+        let s = s_value(self.g, first.power);
+        self.push(format!("{} S{s}", words.on));
+        self.last_s = Some(s);
+        self.power_on = true;
+        let dwell_s = self
+            .g
+            .pierce
+            .as_ref()
+            .map_or(self.g.preheat_dwell_s, |p| p.dwell_s);
+        if dwell_s > 0.0 {
+            self.push(dwell(self.g.dialect, dwell_s));
+        }
+        if let (Some((pierce, cut, _)), Some(z)) = (heights, z) {
+            let mut line = format!("G1 {z}{}", self.coord(cut));
+            if let Some(f) = self.feed_word((pierce - cut).abs(), 0.0, first.feed_mm_s) {
+                let _ = write!(line, " F{f}");
+            }
+            self.push(line);
+        }
+        Ok(())
+    }
+
+    fn power_off(&mut self) {
+        if !self.power_on {
+            return;
+        }
+        if let Some(words) = &self.g.power {
+            let off = words.off.clone();
+            self.push(off);
+        }
+        self.power_on = false;
+        self.last_s = None;
+        if let (Some((_, _, travel)), Some(z)) = (self.heights(), self.g.axis_words.z) {
+            let line = format!("G0 {z}{}", self.coord(travel));
+            self.push(line);
+        }
+    }
+
+    /// True if `p` is where the program already is.
+    fn is_at(&self, p: &Pose) -> Result<bool, EmitError> {
+        let words = self.words(p, self.default_z())?;
+        Ok(self.at.as_ref().is_some_and(|(_, w)| *w == words))
+    }
+
+    fn travel(&mut self, run: &[Pose]) -> Result<(), EmitError> {
+        let mut moves = false;
+        for p in run {
+            moves |= !self.is_at(p)?;
+        }
+        if !moves {
+            return Ok(());
+        }
+        if self.g.pierce.is_some() {
+            self.power_off();
+        }
+        if self.at.is_some() {
+            self.retract_and_lift()?;
+        }
+        for p in run {
+            self.rapid_to(p)?;
+        }
+        Ok(())
+    }
+
+    /// Extrusion: retract and Z-hop before a travel move (once).
+    fn retract_and_lift(&mut self) -> Result<(), EmitError> {
+        let Some(e) = self.g.extrusion.clone() else {
+            return Ok(());
+        };
+        if e.retract_mm > 0.0 && !self.retracted {
+            self.filament(-e.retract_mm, e.retract_feed_mm_s);
+            self.retracted = true;
+        }
+        if e.z_hop_mm > 0.0 && self.lift.is_none() {
+            if let (Some(z), Some((p, _))) = (self.g.axis_words.z, self.at.clone()) {
+                self.lift = Some(e.z_hop_mm);
+                let words = self.words(&p, self.default_z())?;
+                let hop = words
+                    .split(' ')
+                    .find(|w| w.starts_with(z))
+                    .unwrap_or_default();
+                self.push(format!("G0 {hop}"));
+                self.at = Some((p, words));
+            }
+        }
+        Ok(())
+    }
+
+    /// Extrusion: back down and un-retract before depositing at `first`.
+    fn lower_and_prime(&mut self, first: &Pose) -> Result<(), EmitError> {
+        let Some(e) = self.g.extrusion.clone() else {
+            return Ok(());
+        };
+        if self.lift.take().is_some() {
+            if let (Some(z), Some((p, _))) = (self.g.axis_words.z, self.at.clone()) {
+                let words = self.words(&p, ZWord::Pose)?;
+                self.push(format!("G0 {z}{}", self.coord(first.primary[2])));
+                self.at = Some((p, words));
+            }
+        }
+        if self.retracted {
+            self.filament(e.retract_mm, e.retract_feed_mm_s);
+            self.retracted = false;
+        }
+        Ok(())
+    }
+
+    /// A filament-only move of `mm` (negative: retract).
+    fn filament(&mut self, mm: f64, feed_mm_s: f64) {
+        let Some(e) = self.g.extrusion.clone() else {
+            return;
+        };
+        let value = match e.mode {
+            ExtrusionMode::Relative => mm,
+            ExtrusionMode::Absolute => {
+                self.e_position += mm;
+                self.e_position
+            }
+        };
+        let f = number(self.len(feed_mm_s * 60.0), 3);
+        self.last_f = Some(f.clone());
+        let line = format!("G1 {}{} F{f}", e.axis, number(self.len(value), 5));
+        self.push(line);
+    }
+
+    /// A cut or lead segment (or a deposit without an extruder): power on, then feed moves.
+    fn powered(&mut self, run: &[Pose]) -> Result<(), EmitError> {
+        let first = &run[0];
+        if !self.is_at(first)? {
+            if self.g.pierce.is_some() {
+                self.power_off();
+            }
+            if self.power_on {
+                // Continuous power (a hot wire): getting there cuts, so feed, don't rapid.
+                self.feed_to(first, None, false)?;
+            } else {
+                self.retract_and_lift()?;
+                self.rapid_to(first)?;
+            }
+        }
+        self.lower_and_prime(first)?;
+        if !self.power_on {
+            self.power_on(first)?;
+        }
+        self.moves_through(&run[1..], false)
+    }
+
+    /// An extrusion deposit segment: into position, primed, then moves with E.
+    fn deposit(&mut self, run: &[Pose]) -> Result<(), EmitError> {
+        let first = &run[0];
+        if !self.is_at(first)? {
+            self.retract_and_lift()?;
+            self.rapid_to(first)?;
+        }
+        self.lower_and_prime(first)?;
+        self.moves_through(&run[1..], true)
+    }
+
+    fn finish(mut self, job_id: &str) -> Result<String, EmitError> {
+        self.power_off();
+        if self.g.feed_mode == FeedMode::InverseTime {
+            // Leave the controller in the usual mode for whatever is run next.
+            self.push("G94".into());
+        }
+        for line in &self.g.program_end {
+            self.lines
+                .push(fill_template(line, job_id, &self.profile.name));
+        }
+        let ends_program = |l: &String| {
+            let word = l
+                .split_whitespace()
+                .next()
+                .unwrap_or_default()
+                .to_ascii_uppercase();
+            ["M2", "M02", "M30"].contains(&word.as_str())
+        };
+        if self.g.dialect != Dialect::Marlin && !self.lines.last().is_some_and(ends_program) {
+            self.push("M2".into());
+        }
+        let limit = max_line_length(self.g.dialect);
+        if let Some((i, l)) = self.lines.iter().enumerate().find(|(_, l)| l.len() > limit) {
+            return Err(EmitError::LineTooLong {
+                line: i + 1,
+                length: l.len(),
+                limit,
+            });
+        }
+        let mut out = String::with_capacity(self.lines.iter().map(|l| l.len() + 1).sum());
+        for l in &self.lines {
+            out.push_str(l);
+            out.push('\n');
+        }
+        Ok(out)
+    }
+}
+
+/// Swept angle (radians, in (0, 2π)) from `a` to `b` about the origin, counter-clockwise or
+/// clockwise.
+fn sweep(a: Vector2<f64>, b: Vector2<f64>, ccw: bool) -> f64 {
+    let t = b.y.atan2(b.x) - a.y.atan2(a.x);
+    let t = if ccw { t } else { -t };
+    t.rem_euclid(std::f64::consts::TAU)
+}
+
+fn round_to(v: f64, decimals: usize) -> f64 {
+    number(v, decimals).parse().unwrap_or(v)
 }
 
 /// The modal words the program relies on, from the settings (never from a template).
@@ -300,7 +770,7 @@ fn dwell(dialect: Dialect, seconds: f64) -> String {
     match dialect {
         // Marlin: P is milliseconds, S seconds.
         Dialect::Marlin => format!("G4 S{}", number(seconds, 3)),
-        // GRBL, LinuxCNC and Mach3 (default setting): P in seconds.
+        // GRBL, LinuxCNC and Mach3 (its default setting): P in seconds.
         _ => format!("G4 P{}", number(seconds, 3)),
     }
 }

@@ -1,17 +1,22 @@
 //! `cell_emitter`: turns a `Toolpath` into a `MachineProgram` for a machine profile.
 //!
+//! - [`arcs`]: G2/G3 arc fitting within a tolerance.
 //! - [`gcode`]: G-code for the profile's dialect (`cell_profiles::GcodeSettings`): axis words,
 //!   decimals, G94 or G93 inverse-time feeds, power words, pre-heat dwell, start and end lines.
-//! - [`rapid`]: ABB RAPID modules (`.mod`) and program files (`.pgf`) for a robot profile.
+//! - [`rapid`]: ABB RAPID modules (`.mod`, `.modx` on RobotWare 7) and program files (`.pgf`)
+//!   for a robot profile (seed 004 §4.7): robtargets, speeddata per speed, arc or digital-output
+//!   weld on/off, module splitting.
 //! - [`program`]: the `MachineProgram` message (files, line count, SHA-256) and atomic file
 //!   output.
 //! - [`node`]: the `emitter` ROS 2 node (topic in, topic out, the `emit_program` service).
 //!
-//! Everything but [`node`] is pure and synchronous: it knows nothing of ROS. Every input is checked first, so a bad
-//! toolpath gives an error naming the segment and point and never a partial program.
+//! Everything but [`node`] is pure and synchronous: it knows nothing of ROS. Every input is
+//! checked first, so a bad toolpath gives an error naming the segment and point and never a
+//! partial program.
 
 #![warn(missing_docs)]
 
+pub mod arcs;
 pub mod gcode;
 pub mod node;
 pub mod program;
@@ -116,6 +121,26 @@ pub enum EmitError {
         /// The feed given.
         feed_mm_s: f32,
     },
+    /// A negative power (current, laser power or flow).
+    #[error("segment {segment} point {point}: power {power} must be >= 0")]
+    Power {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// The power given.
+        power: f32,
+    },
+    /// A program line longer than the controller accepts.
+    #[error("program line {line} has {length} characters; the controller takes at most {limit}")]
+    LineTooLong {
+        /// 1-based line number in the program.
+        line: usize,
+        /// Its length.
+        length: usize,
+        /// The dialect's limit.
+        limit: usize,
+    },
     /// Per-point arrays of a segment with the wrong length.
     #[error("segment {segment}: {what} has {found} entries, the segment has {expected} points")]
     Length {
@@ -145,6 +170,54 @@ pub enum EmitError {
         point: usize,
         /// Which axis and value.
         violation: cell_profiles::EnvelopeViolation,
+    },
+    /// A feed above the machine's `max_feed_mm_s` (RAPID: the speed of a move, travel speed
+    /// included).
+    #[error("segment {segment} point {point}: speed {feed_mm_s} mm/s is above the machine's max_feed_mm_s = {max_feed_mm_s}")]
+    FeedLimit {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// The speed asked for, mm/s.
+        feed_mm_s: f64,
+        /// The profile's limit, mm/s.
+        max_feed_mm_s: f64,
+    },
+    /// A tool-axis normal of (nearly) zero length: no orientation can be derived from it.
+    #[error("segment {segment} point {point}: the normal has zero length")]
+    Normal {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+    },
+    /// A process run (cut, deposit or lead points between travel moves) of a single point:
+    /// the process would switch on and off at one place.
+    #[error(
+        "segment {segment} point {point}: a weld run needs at least two points, this one has one"
+    )]
+    ShortRun {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+    },
+    /// More part modules than the names allow (RAPID: raise `max_targets_per_module`).
+    #[error("the program needs {modules} modules, more than {max}; raise max_targets_per_module")]
+    TooManyModules {
+        /// Modules needed.
+        modules: usize,
+        /// The most the emitter writes.
+        max: usize,
+    },
+    /// A name built from user text that is not a valid identifier of the output language.
+    #[error("identifier {name:?}: {reason}")]
+    Identifier {
+        /// The name.
+        name: String,
+        /// The rule broken.
+        reason: String,
     },
     /// Writing the output failed.
     #[error("{path}: {message}")]

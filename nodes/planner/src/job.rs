@@ -1123,8 +1123,8 @@ fn check_envelope(
 ) -> Result<(), JobError> {
     for (k, (xy, uv)) in motion.xy.iter().zip(&motion.uv).enumerate() {
         let mut position = vec![('X', xy.x), ('Y', xy.y)];
-        if four_axis {
-            position.extend([('U', uv.x), ('V', uv.y)]);
+        if let (true, Some([u, v])) = (four_axis, machine.second_carriage_axes()) {
+            position.extend([(u, uv.x), (v, uv.y)]);
         }
         machine
             .check_position(&position)

@@ -23,12 +23,40 @@ pub use rapid::RapidSettings;
 /// The profiles shipped in `config/machines/`, compiled in: (name, YAML text).
 pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
     (
+        "abb-irb1600-rw7-do",
+        include_str!("../../../config/machines/abb-irb1600-rw7-do.yaml"),
+    ),
+    (
+        "abb-irb2600-waam",
+        include_str!("../../../config/machines/abb-irb2600-waam.yaml"),
+    ),
+    (
         "grbl-xy",
         include_str!("../../../config/machines/grbl-xy.yaml"),
     ),
     (
+        "grbl-xyuv",
+        include_str!("../../../config/machines/grbl-xyuv.yaml"),
+    ),
+    (
+        "mach3-xyab",
+        include_str!("../../../config/machines/mach3-xyab.yaml"),
+    ),
+    (
         "linuxcnc-xyuv",
         include_str!("../../../config/machines/linuxcnc-xyuv.yaml"),
+    ),
+    (
+        "grbl-laser",
+        include_str!("../../../config/machines/grbl-laser.yaml"),
+    ),
+    (
+        "linuxcnc-plasma",
+        include_str!("../../../config/machines/linuxcnc-plasma.yaml"),
+    ),
+    (
+        "marlin-extruder",
+        include_str!("../../../config/machines/marlin-extruder.yaml"),
     ),
 ];
 
@@ -104,6 +132,15 @@ pub struct HotwireGeometry {
     pub wire: String,
     /// The wire supply's current range [min, max], A.
     pub supply_a: [f64; 2],
+    /// Axis letters of the second (UV) carriage: `[U, V]` (the default), or e.g. `[A, B]` on a
+    /// Mach3 or GRBL board that drives the far tower on A and B. A machine without these axes
+    /// is a 2-axis cutter.
+    #[serde(default = "default_uv_axes")]
+    pub uv_axes: [char; 2],
+}
+
+fn default_uv_axes() -> [char; 2] {
+    ['U', 'V']
 }
 
 /// One machine (module docs).
@@ -500,11 +537,23 @@ impl MachineProfile {
                     ));
                 }
             }
-            if self.axes.contains_key(&'U') != self.axes.contains_key(&'V') {
+            let [u, v] = h.uv_axes;
+            if self.axes.contains_key(&u) != self.axes.contains_key(&v) {
                 return Err(invalid(
                     "axes",
-                    "a 4-axis hot-wire machine needs both U and V".into(),
+                    format!("a 4-axis hot-wire machine needs both {u} and {v} (hotwire.uv_axes)"),
                 ));
+            }
+            if let Some(g) = &self.gcode {
+                let words = (g.axis_words.u, g.axis_words.v);
+                if self.axes.contains_key(&u) && words != (Some(u), Some(v)) {
+                    return Err(invalid(
+                        "gcode.axis_words",
+                        format!(
+                            "the second carriage is on {u} {v} (hotwire.uv_axes): u: {u}, v: {v}"
+                        ),
+                    ));
+                }
             }
             if !(h.tower_separation_mm.is_finite() && h.tower_separation_mm > 0.0) {
                 return Err(invalid(
@@ -626,7 +675,19 @@ impl MachineProfile {
                     }
                 }
             }
+            if g.dialect == Dialect::Marlin && g.feed_mode == FeedMode::InverseTime {
+                return Err(invalid(
+                    "gcode.feed_mode",
+                    "Marlin has no inverse-time feed (G93); use units_per_minute".into(),
+                ));
+            }
             if let Some(e) = &g.extrusion {
+                if g.power.is_some() {
+                    return Err(invalid(
+                        "gcode.extrusion",
+                        "an extrusion profile's power is the flow: remove the power section".into(),
+                    ));
+                }
                 if !self.axes.contains_key(&e.axis) {
                     return Err(invalid(
                         "gcode.extrusion.axis",
@@ -686,7 +747,13 @@ impl MachineProfile {
 
     /// True for a hot-wire machine with a UV carriage (tapered panels possible).
     pub fn is_four_axis_hotwire(&self) -> bool {
-        self.hotwire.is_some() && self.axes.contains_key(&'U')
+        self.second_carriage_axes().is_some()
+    }
+
+    /// The second (UV) carriage's axis letters on a 4-axis hot-wire machine.
+    pub fn second_carriage_axes(&self) -> Option<[char; 2]> {
+        let h = self.hotwire.as_ref()?;
+        self.axes.contains_key(&h.uv_axes[0]).then_some(h.uv_axes)
     }
 
     /// Checks one position given as (axis, value) pairs against the travel. Axes the machine
@@ -800,13 +867,104 @@ mod tests {
         );
         let text = base().replace("u: U, v: V", "u: W, v: V");
         let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
-        assert!(e.to_string().contains("gcode.axis_words.u: axis W"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("gcode.axis_words: the second carriage is on U V"),
+            "{e}"
+        );
         let text = base().replace("u: U, v: V", "u: U");
         let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
         assert!(e.to_string().contains("gcode.axis_words:"), "{e}");
         let text = base().replace("feed_mode: inverse_time", "feed_mode: inverse");
         let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
         assert!(e.to_string().contains("feed_mode"), "{e}");
+    }
+
+    fn embedded(name: &str) -> String {
+        EMBEDDED_PROFILES
+            .iter()
+            .find(|(n, _)| *n == name)
+            .unwrap()
+            .1
+            .to_string()
+    }
+
+    #[test]
+    fn process_settings_are_checked_and_name_their_field() {
+        for (profile, from, to, field) in [
+            (
+                "linuxcnc-plasma",
+                "program_start: [\"G64 P0.05\"]",
+                "program_start: [\"G64 P0.05\", \"G91\"]",
+                "gcode.program_start[1]",
+            ),
+            (
+                "linuxcnc-plasma",
+                "program_start: [\"G64 P0.05\"]",
+                "program_start: [\"(job {jobid})\"]",
+                "gcode.program_start[0]",
+            ),
+            ("linuxcnc-plasma", "z_pierce_mm: 3.8, ", "", "gcode.pierce"),
+            (
+                "linuxcnc-plasma",
+                "z_travel_mm: 10.0",
+                "z_travel_mm: 150.0",
+                "gcode.pierce.z_travel_mm",
+            ),
+            (
+                "grbl-laser",
+                "arc_tolerance_mm: 0.01",
+                "arc_tolerance_mm: 0",
+                "gcode.arc_tolerance_mm",
+            ),
+            (
+                "linuxcnc-xyuv",
+                "preheat_dwell_s: 2.0",
+                "preheat_dwell_s: 2.0\n  arc_tolerance_mm: 0.01",
+                "gcode.arc_tolerance_mm",
+            ),
+            (
+                "marlin-extruder",
+                "feed_mode: units_per_minute",
+                "feed_mode: inverse_time",
+                "gcode.feed_mode",
+            ),
+            (
+                "marlin-extruder",
+                "filament_diameter_mm: 1.75",
+                "filament_diameter_mm: -1.75",
+                "gcode.extrusion.filament_diameter_mm",
+            ),
+            (
+                "marlin-extruder",
+                "  arc_tolerance_mm: 0.01",
+                "  arc_tolerance_mm: 0.01\n  power: {on: M3, off: M5, s_per_unit: 1.0}",
+                "gcode.extrusion",
+            ),
+            ("mach3-xyab", "uv_axes: [A, B]", "uv_axes: [A, C]", "axes"),
+        ] {
+            let text = embedded(profile).replace(from, to);
+            assert_ne!(text, embedded(profile), "{from}");
+            let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+            assert!(
+                matches!(&e, ProfileError::Invalid { field: f, .. } if f == field),
+                "{profile} {to}: {e}"
+            );
+        }
+        // Placeholders and the arc-centre mode word are fine in templates; G91 inside a comment too.
+        let text = embedded("linuxcnc-plasma").replace(
+            "program_start: [\"G64 P0.05\"]",
+            "program_start: [\"(job {job} on {profile}, not G91)\", \"G91.1\"]",
+        );
+        MachineProfile::from_yaml_str(&text, "m.yaml").unwrap();
+        // A mistyped key in a nested section names it with its line.
+        let text = embedded("marlin-extruder").replace("retract_mm:", "retract:");
+        let e = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap_err();
+        assert!(
+            matches!(e, ProfileError::Parse { line: Some(_), .. }),
+            "{e}"
+        );
+        assert!(e.to_string().contains("retract"), "{e}");
     }
 
     #[test]

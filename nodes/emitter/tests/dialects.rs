@@ -1,0 +1,185 @@
+//! Golden programs: one small program per G-code profile, byte for byte (insta snapshots in
+//! `tests/snapshots/`; review changes with `cargo insta review`), plus the properties each
+//! dialect's program must have whatever the snapshot says.
+
+mod common;
+
+use cell_emitter::gcode;
+use cell_profiles::MachineProfile;
+
+fn program(profile: &str, tp: &cell_msgs::Toolpath) -> String {
+    let profile = MachineProfile::resolve(profile).unwrap();
+    gcode::emit(tp, &profile, &tp.job_id).unwrap()
+}
+
+#[test]
+fn every_dialect_sample_matches_its_golden_program() {
+    for (profile, tp) in common::dialect_samples() {
+        insta::assert_snapshot!(profile, program(profile, &tp));
+    }
+}
+
+#[test]
+fn inch_units_divide_every_length_but_not_inverse_time() {
+    let text = cell_profiles::EMBEDDED_PROFILES
+        .iter()
+        .find(|(n, _)| *n == "grbl-laser")
+        .unwrap()
+        .1
+        .replace("decimals: 3", "decimals: 4\n  units: inch");
+    let profile = MachineProfile::from_yaml_str(&text, "inch.yaml").unwrap();
+    let tp = common::sheet_part();
+    let inch = gcode::emit(&tp, &profile, "plate").unwrap();
+    insta::assert_snapshot!("grbl-laser-inch", inch);
+    assert!(inch.lines().nth(1).unwrap().contains("G20"));
+    // The hole's first point, x = 70 mm, and the cut feed 1200 mm/min.
+    assert!(inch.contains("G0 X2.7559 Y1.9685\n"), "{inch}");
+    assert!(inch.contains(" F47.244"), "{inch}");
+}
+
+#[test]
+fn each_dialect_keeps_to_its_own_words() {
+    for (profile, tp) in common::dialect_samples() {
+        let text = program(profile, &tp);
+        let limit = gcode::max_line_length(
+            MachineProfile::resolve(profile)
+                .unwrap()
+                .gcode
+                .unwrap()
+                .dialect,
+        );
+        assert!(text.lines().all(|l| l.len() <= limit), "{profile}");
+        let marlin = profile.starts_with("marlin");
+        let ends = text.ends_with("M2\n") || text.ends_with("M30\n");
+        assert_eq!(ends, !marlin, "{profile}");
+        assert_eq!(text.contains('('), !marlin, "{profile}: comment style");
+        assert_eq!(
+            text.contains("G93"),
+            profile.ends_with("xyuv") || profile.ends_with("xyab")
+        );
+        assert_eq!(text.contains(" U"), profile.ends_with("xyuv"), "{profile}");
+        assert_eq!(text.contains(" A"), profile.ends_with("xyab"), "{profile}");
+        let arcs = text
+            .lines()
+            .filter(|l| l.starts_with("G2 ") || l.starts_with("G3 "))
+            .count();
+        let fitted = MachineProfile::resolve(profile)
+            .unwrap()
+            .gcode
+            .unwrap()
+            .arc_tolerance_mm
+            .is_some();
+        assert_eq!(arcs > 0, fitted, "{profile}: {arcs} arcs");
+    }
+}
+
+#[test]
+fn sheet_cuts_are_pierced_once_per_contour_and_travel_is_unpowered() {
+    for profile in ["grbl-laser", "linuxcnc-plasma"] {
+        let text = program(profile, &common::sheet_part());
+        let on = if profile == "grbl-laser" {
+            "M4 S800"
+        } else {
+            "M3 S80"
+        };
+        assert_eq!(
+            text.matches(on).count(),
+            2,
+            "{profile}: one pierce per contour"
+        );
+        assert_eq!(text.matches("M5").count(), 2, "{profile}");
+        assert_eq!(text.matches("G4 P").count(), 2, "{profile}");
+        // Between a power-off and the next power-on there are only rapids.
+        let mut powered = false;
+        for line in text.lines() {
+            if line.starts_with("M4") || line.starts_with("M3") {
+                powered = true;
+            } else if line == "M5" {
+                powered = false;
+            } else if ["G1", "G2", "G3"].contains(&line.split(' ').next().unwrap()) {
+                assert!(powered, "{profile}: a feed move with the power off: {line}");
+            }
+        }
+    }
+    // Plasma: pierce high, cut low, travel safe.
+    let plasma = program("linuxcnc-plasma", &common::sheet_part());
+    let pierce = plasma.find("G0 Z3.800\nM3 S80\nG4 P0.500\nG1 Z1.500 F1200.000\n");
+    assert!(pierce.is_some(), "{plasma}");
+    assert_eq!(plasma.matches("M5\nG0 Z10.000\n").count(), 2, "{plasma}");
+}
+
+#[test]
+fn extrusion_pushes_the_filament_the_flow_needs_and_retracts_around_travel() {
+    for mode in ["absolute", "relative"] {
+        let text = cell_profiles::EMBEDDED_PROFILES
+            .iter()
+            .find(|(n, _)| *n == "marlin-extruder")
+            .unwrap()
+            .1
+            .replace("mode: absolute", &format!("mode: {mode}"));
+        let profile = MachineProfile::from_yaml_str(&text, "m.yaml").unwrap();
+        let tp = common::printed_layers();
+        let program = gcode::emit(&tp, &profile, "rib").unwrap();
+        // Filament for the deposit: Σ flow · (length / feed) / filament area.
+        let area = std::f64::consts::PI * 1.75f64.powi(2) / 4.0;
+        let mut want = 0.0;
+        for seg in tp
+            .segments
+            .iter()
+            .filter(|s| s.kind == cell_msgs::ToolpathSegment::KIND_DEPOSIT)
+        {
+            for k in 1..seg.points.len() {
+                let (a, b) = (seg.points[k - 1], seg.points[k]);
+                let len = ((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt();
+                want += f64::from(seg.power[k]) * len / f64::from(seg.feed_mm_s[k]) / area;
+            }
+        }
+        let e_words: Vec<f64> = program
+            .lines()
+            .filter_map(|l| l.split(' ').find(|w| w.starts_with('E')))
+            .map(|w| w[1..].parse().unwrap())
+            .collect();
+        let pushed = if mode == "relative" {
+            e_words.iter().sum::<f64>()
+        } else {
+            *e_words.last().unwrap()
+        };
+        // Arcs are a hair longer than the chords they replace; rounding to 1e-5 per move.
+        assert!(
+            (pushed - want).abs() < 2e-3 * want,
+            "{mode}: {pushed} vs {want}"
+        );
+        // One retract before the travel between layers, one prime after it, each 0.8 mm.
+        let retracts = program
+            .lines()
+            .filter(|l| l.starts_with("G1 E") && l.ends_with("F2100.000"))
+            .count();
+        assert_eq!(retracts, 2, "{mode}:\n{program}");
+        assert!(program.contains("G0 Z0.600\n"), "Z-hop above layer 1");
+        assert!(program.contains("M83") == (mode == "relative"));
+    }
+}
+
+#[test]
+fn a_hostile_job_id_cannot_add_a_command_in_any_dialect() {
+    let hostile = "x)\nM3 S9999 (\r; G0 X0 %\n{profile}";
+    for (name, tp) in common::dialect_samples() {
+        let profile = MachineProfile::resolve(name).unwrap();
+        let clean = gcode::emit(&tp, &profile, "x").unwrap();
+        let text = gcode::emit(&tp, &profile, hostile).unwrap();
+        assert_eq!(text.lines().count(), clean.lines().count(), "{name}");
+        assert!(
+            !text.contains("S9999\n") && !text.contains('%'),
+            "{name}: {text}"
+        );
+        // Only the comment and the {job} templates differ.
+        for (a, b) in text.lines().zip(clean.lines()) {
+            if a != b {
+                assert!(
+                    a.starts_with('(') || a.starts_with(';') || a.starts_with("M117"),
+                    "{name}: {a}"
+                );
+            }
+        }
+    }
+}
