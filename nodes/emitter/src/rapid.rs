@@ -552,6 +552,23 @@ fn moves(
             at.push((si, pi));
         }
     }
+    // A move to where the robot already is (same position and orientation) is dropped: a
+    // travel point on a weld start (the weld start moves there) or on a weld end, or a
+    // repeated point inside a run or a travel.
+    let mut keep = vec![true; out.len()];
+    for i in 0..out.len().saturating_sub(1) {
+        let (a, b) = (&out[i], &out[i + 1]);
+        let same = a.position == b.position && a.quat == b.quat;
+        if same && a.welded && !b.welded {
+            keep[i + 1] = false; // a travel starting where the weld ended
+        } else if same {
+            keep[i] = false;
+        }
+    }
+    let mut flags = keep.iter();
+    out.retain(|_| *flags.next().unwrap_or(&true));
+    let mut flags = keep.iter();
+    at.retain(|_| *flags.next().unwrap_or(&true));
     let len = out.len();
     for i in 0..len {
         if !out[i].welded {
@@ -565,6 +582,11 @@ fn moves(
         }
         out[i].run_start = start;
         out[i].run_end = end;
+        if start && i > 0 {
+            // The move to a weld start is the approach, before the process starts: it runs at
+            // the travel speed it comes from, not the bead speed.
+            out[i].speed = out[i - 1].speed.clone();
+        }
     }
     Ok(out)
 }

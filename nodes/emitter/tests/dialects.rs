@@ -183,3 +183,48 @@ fn a_hostile_job_id_cannot_add_a_command_in_any_dialect() {
         }
     }
 }
+
+/// The sample toolpaths in `tests/data/toolpaths/` (the README's `cell emit` examples) are these
+/// fixtures; `UPDATE_SAMPLES=1 cargo test -p cell_emitter --test dialects` rewrites them.
+#[test]
+fn sample_toolpath_files_are_the_fixtures() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/toolpaths");
+    for (file, tp) in [
+        ("panel.json", common::hotwire_panel()),
+        ("straight.json", common::hotwire_straight()),
+        ("plate.json", common::sheet_part()),
+        ("rib.json", common::printed_layers()),
+        ("wall.json", common::waam_wall()),
+    ] {
+        let json = serde_json::to_string_pretty(&tp).unwrap() + "\n";
+        let path = dir.join(file);
+        if std::env::var_os("UPDATE_SAMPLES").is_some() {
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(&path, &json).unwrap();
+        }
+        let on_disk = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            on_disk == json,
+            "{file} differs from its fixture: rerun with UPDATE_SAMPLES=1"
+        );
+        // Read back (serde_json may differ in the last bit of a float): the same points to 1e-9.
+        let back: cell_msgs::Toolpath = cell_msgs::json::from_str(&on_disk).unwrap();
+        let flat = |t: &cell_msgs::Toolpath| -> Vec<f64> {
+            t.segments
+                .iter()
+                .flat_map(|s| s.points.iter().flat_map(|p| [p.x, p.y, p.z]))
+                .collect()
+        };
+        let (a, b) = (flat(&back), flat(&tp));
+        assert_eq!(a.len(), b.len(), "{file}");
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-9),
+            "{file}"
+        );
+    }
+    // The robot sample emits for the WAAM cell (the RW7 robot works in its base frame).
+    let robot = MachineProfile::resolve("abb-irb2600-waam").unwrap();
+    let program = cell_emitter::emit_program(&common::waam_wall(), &robot, "wall").unwrap();
+    let names: Vec<&str> = program.files.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(names, ["WAAM_wall.mod", "WAAM_wall.pgf"]);
+}

@@ -186,6 +186,55 @@ pub fn printed_layers() -> Toolpath {
     }
 }
 
+/// A WAAM wall for a robot: two 120 mm beads (layers at z = 2 and 3.6 mm), the torch normal
+/// straight up, 8 mm/s then 10 mm/s (one speeddata each), with an approach and a travel between.
+pub fn waam_wall() -> Toolpath {
+    let bead = |z: f64, reverse: bool| {
+        let mut pts: Vec<[f64; 3]> = (0..=4)
+            .map(|k| [100.0 + 30.0 * f64::from(k), 100.0, z])
+            .collect();
+        if reverse {
+            pts.reverse();
+        }
+        pts
+    };
+    let (first, second) = (bead(2.0, false), bead(3.6, true));
+    let mut segments = vec![
+        segment(
+            ToolpathSegment::KIND_TRAVEL,
+            &[[100.0, 100.0, 50.0], first[0]],
+            100.0,
+            0.0,
+        ),
+        segment(ToolpathSegment::KIND_DEPOSIT, &first, 8.0, 1.0),
+        segment(
+            ToolpathSegment::KIND_TRAVEL,
+            &[first[4], [220.0, 100.0, 20.0], second[0]],
+            100.0,
+            0.0,
+        ),
+        segment(ToolpathSegment::KIND_DEPOSIT, &second, 10.0, 1.0),
+    ];
+    for s in &mut segments {
+        s.normals = vec![
+            cell_msgs::geometry_msgs::Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: 1.0
+            };
+            s.points.len()
+        ];
+        s.layer = u32::from(s.points[0].z > 3.0);
+    }
+    Toolpath {
+        job_id: "wall".into(),
+        process: Toolpath::PROCESS_WAAM,
+        power_unit: Toolpath::POWER_ARC_ON,
+        segments,
+        ..Default::default()
+    }
+}
+
 /// The fixture for each G-code profile: (profile, toolpath).
 pub fn dialect_samples() -> Vec<(&'static str, Toolpath)> {
     vec![
