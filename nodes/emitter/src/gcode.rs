@@ -123,21 +123,7 @@ fn poses(
     let w = &g.axis_words;
     let mut out = Vec::new();
     for (si, seg) in toolpath.segments.iter().enumerate() {
-        let n = seg.points.len();
-        for (what, len, may_be_empty) in [
-            ("secondary_points", seg.secondary_points.len(), true),
-            ("feed_mm_s", seg.feed_mm_s.len(), false),
-            ("power", seg.power.len(), true),
-        ] {
-            if len != n && !(may_be_empty && len == 0) {
-                return Err(EmitError::Length {
-                    segment: si,
-                    what,
-                    expected: n,
-                    found: len,
-                });
-            }
-        }
+        crate::check_lengths(seg, si, false)?;
         for (pi, p) in seg.points.iter().enumerate() {
             let s = seg.secondary_points.get(pi).copied().unwrap_or(*p);
             let feed = f64::from(seg.feed_mm_s[pi]);

@@ -228,3 +228,32 @@ pub enum EmitError {
         message: String,
     },
 }
+
+/// Checks that a segment's per-point arrays each hold one entry per point (`secondary_points`,
+/// `power` and, if `with_normals`, `normals` may also be empty).
+fn check_lengths(
+    seg: &cell_msgs::ToolpathSegment,
+    segment: usize,
+    with_normals: bool,
+) -> Result<(), EmitError> {
+    let n = seg.points.len();
+    let mut arrays = vec![
+        ("secondary_points", seg.secondary_points.len(), true),
+        ("feed_mm_s", seg.feed_mm_s.len(), false),
+        ("power", seg.power.len(), true),
+    ];
+    if with_normals {
+        arrays.push(("normals", seg.normals.len(), true));
+    }
+    for (what, len, may_be_empty) in arrays {
+        if len != n && !(may_be_empty && len == 0) {
+            return Err(EmitError::Length {
+                segment,
+                what,
+                expected: n,
+                found: len,
+            });
+        }
+    }
+    Ok(())
+}

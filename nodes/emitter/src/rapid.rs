@@ -452,22 +452,7 @@ fn moves(
     let mut at: Vec<(usize, usize)> = Vec::new();
     let default_quat = canonical(normalised(r.default_orientation));
     for (si, seg) in toolpath.segments.iter().enumerate() {
-        let n = seg.points.len();
-        for (what, len, may_be_empty) in [
-            ("secondary_points", seg.secondary_points.len(), true),
-            ("normals", seg.normals.len(), true),
-            ("feed_mm_s", seg.feed_mm_s.len(), false),
-            ("power", seg.power.len(), true),
-        ] {
-            if len != n && !(may_be_empty && len == 0) {
-                return Err(EmitError::Length {
-                    segment: si,
-                    what,
-                    expected: n,
-                    found: len,
-                });
-            }
-        }
+        crate::check_lengths(seg, si, true)?;
         let welded = seg.kind != ToolpathSegment::KIND_TRAVEL;
         for (pi, p) in seg.points.iter().enumerate() {
             let feed = f64::from(seg.feed_mm_s[pi]);
