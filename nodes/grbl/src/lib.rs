@@ -1,0 +1,15 @@
+//! GRBL 1.1 for cellsuite's machine bridge, with no ROS in it: a streaming client that behaves
+//! like the best senders (character counting or send-response, status polling, real-time
+//! commands, safe stop, resume after a link drop) and a GRBL 1.1 protocol simulator.
+//!
+//! - [`protocol`]: real-time bytes, response and status-report parsing, error/alarm tables.
+//! - [`program`]: a program cleaned for streaming, with original line numbers kept.
+//! - [`transport`]: TCP, serial, pty behind one trait.
+//! - [`stream`]: the streaming client ([`stream::GrblClient`]).
+//! - [`sim`]: the simulator.
+
+pub mod program;
+pub mod protocol;
+pub mod sim;
+pub mod stream;
+pub mod transport;

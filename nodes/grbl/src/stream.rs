@@ -1,0 +1,1419 @@
+//! The GRBL streaming client.
+//!
+//! One tokio task (the *link task*) owns the connection. It writes program lines under the
+//! chosen flow control, matches every `ok`/`error:N` to the line it answers (GRBL answers lines
+//! strictly in order), polls `?` at a fixed period, and writes real-time bytes the moment they
+//! are asked for (commands are served before anything else the task has to do). The
+//! [`GrblClient`] handle is cheap to clone and can be used from any task: one task streams while
+//! another holds, overrides or aborts.
+//!
+//! Flow control:
+//! - [`FlowControl::CharacterCounting`]: keep sending while the bytes of all unanswered lines,
+//!   `\n` included, fit in GRBL's RX buffer (`rx_buffer_bytes - 1` = 127 usable bytes of the
+//!   128-byte ring). Each `ok`/`error` frees its line's bytes. This keeps the RX buffer fed and
+//!   never overflows it ([`RxBudget`]).
+//! - [`FlowControl::SendResponse`]: one line at a time.
+//!
+//! Faults: an `error:N` to a program line, an `ALARM:N`, an unexpected reset banner, a link drop
+//! or [`GrblClient::abort`] stop the streaming at once (no further line is written). The link task
+//! writes `!` (feed hold) immediately for every fault but a link drop; the stream call then runs
+//! the configured [`FaultAction`], by default [`GrblClient::safe_stop`]:
+//! 1. `!` feed hold (already sent), then wait (polling `?`) until the machine reports `Hold:0`,
+//!    `Idle`, `Alarm` or `Door` (the controlled stop keeps the position);
+//! 2. `0x18` soft reset, and wait for the `Grbl 1.1h` banner (GRBL flushes its RX buffer and
+//!    planner and switches the spindle, which drives the heat, off);
+//! 3. only if the controller is not in alarm after the reset (or `unlock_after_reset` is set, in
+//!    which case `$X` is sent first): `M5`, so the heat is off in the modal state as well, and
+//!    its `ok` confirms it.
+//!
+//! The returned [`StreamError`] names the fault, the original line number of the line GRBL
+//! rejected, the last acknowledged line and the lines that were sent but never acknowledged.
+//!
+//! Resume after a link drop: [`GrblClient::reconnect`], then
+//! [`GrblClient::stream_from`] with the operator-confirmed line. Lines up to
+//! [`StreamError::last_acked_line`] were accepted into GRBL's planner; lines in
+//! [`StreamError::unacked_lines`] are the ambiguous window: sent, but whether GRBL parsed them is
+//! unknown (the `ok` may have been lost with the link). A controller that kept running (TCP
+//! controllers, a serial GRBL whose board did not reset) executes what its planner held, so
+//! the usual confirmed line is `last_acked_line + 1`; if the controller reset, its planner was
+//! lost and the operator must pick the line from the machine's position. The client re-sends
+//! exactly the lines from the confirmed one on, each once, and assumes the modal state (units,
+//! distance mode, feed, spindle) the controller holds is the one the program had there.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::io::{AsyncReadExt, AsyncWriteExt, WriteHalf};
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
+use tokio::task::JoinHandle;
+use tokio::time::{Instant, MissedTickBehavior};
+
+use crate::program::Program;
+use crate::protocol::{
+    alarm_message, error_message, override_steps, parse_response, MachineState, OverrideKind,
+    Realtime, Response, StatusReport, RX_BUFFER_SIZE,
+};
+use crate::transport::{BoxedTransport, Connect};
+
+/// Flow control for streaming.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FlowControl {
+    /// Fill GRBL's RX buffer, counting every byte of every unanswered line.
+    CharacterCounting,
+    /// Send one line, wait for its answer, send the next.
+    SendResponse,
+}
+
+/// What a stream call does after a fault stopped it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultAction {
+    /// [`GrblClient::safe_stop`]: feed hold, soft reset, `M5`.
+    SafeStop,
+    /// Leave the machine in feed hold for the operator (the hold is sent at once).
+    HoldOnly,
+}
+
+/// Client settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClientConfig {
+    /// Flow control.
+    pub flow: FlowControl,
+    /// The controller's serial RX buffer (GRBL 1.1 on an AVR: 128); character counting keeps
+    /// at most `rx_buffer_bytes - 1` bytes unanswered.
+    pub rx_buffer_bytes: usize,
+    /// Status poll period (`?`); GRBL recommends at most 5 Hz.
+    pub status_period: Duration,
+    /// How long to wait for the first status report after connecting.
+    pub connect_timeout: Duration,
+    /// What a stream call does after a fault.
+    pub on_fault: FaultAction,
+    /// Longest wait for a feed hold to come to a stop during a safe stop.
+    pub hold_timeout: Duration,
+    /// Longest wait for the banner after a soft reset.
+    pub reset_timeout: Duration,
+    /// Send `$X` after a safe stop's reset left the controller in alarm (then `M5`). Off by
+    /// default: an alarm after a reset in motion means the position may be lost, which an
+    /// operator should see before unlocking.
+    pub unlock_after_reset: bool,
+    /// Connection attempts in [`GrblClient::reconnect`].
+    pub reconnect_attempts: u32,
+    /// Pause between connection attempts.
+    pub reconnect_delay: Duration,
+}
+
+impl Default for ClientConfig {
+    fn default() -> Self {
+        ClientConfig {
+            flow: FlowControl::CharacterCounting,
+            rx_buffer_bytes: RX_BUFFER_SIZE,
+            status_period: Duration::from_millis(200),
+            connect_timeout: Duration::from_secs(10),
+            on_fault: FaultAction::SafeStop,
+            hold_timeout: Duration::from_secs(30),
+            reset_timeout: Duration::from_secs(5),
+            unlock_after_reset: false,
+            reconnect_attempts: 5,
+            reconnect_delay: Duration::from_millis(500),
+        }
+    }
+}
+
+/// Character-counting bookkeeping: the bytes of every line sent and not yet answered.
+///
+/// GRBL answers lines in order, so answers free the oldest line first.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RxBudget {
+    capacity: usize,
+    lines: VecDeque<usize>,
+    used: usize,
+}
+
+impl RxBudget {
+    /// A budget of `capacity` bytes (for GRBL: `rx_buffer_bytes - 1`).
+    pub fn new(capacity: usize) -> RxBudget {
+        RxBudget {
+            capacity,
+            lines: VecDeque::new(),
+            used: 0,
+        }
+    }
+
+    /// Whether a line of `wire_len` bytes (`\n` included) may be sent now.
+    pub fn fits(&self, wire_len: usize) -> bool {
+        self.used + wire_len <= self.capacity
+    }
+
+    /// Records a line of `wire_len` bytes as sent.
+    pub fn sent(&mut self, wire_len: usize) {
+        self.lines.push_back(wire_len);
+        self.used += wire_len;
+    }
+
+    /// Records the answer to the oldest line; returns its length, or `None` if nothing was
+    /// outstanding.
+    pub fn answered(&mut self) -> Option<usize> {
+        let n = self.lines.pop_front()?;
+        self.used -= n;
+        Some(n)
+    }
+
+    /// Forgets every outstanding line (after a reset GRBL's buffer is empty).
+    pub fn clear(&mut self) {
+        self.lines.clear();
+        self.used = 0;
+    }
+
+    /// Bytes outstanding.
+    pub fn used(&self) -> usize {
+        self.used
+    }
+
+    /// Lines outstanding.
+    pub fn outstanding(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// The capacity in bytes.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+}
+
+/// What the link task publishes for the node's feedback (through a `watch`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Progress {
+    /// A link is up.
+    pub connected: bool,
+    /// Connections made so far (1 after the first connect).
+    pub connections: u64,
+    /// A program is being streamed.
+    pub streaming: bool,
+    /// Lines in the current (or last) job.
+    pub lines_total: usize,
+    /// Lines of that job written to the link.
+    pub lines_sent: usize,
+    /// Lines of that job acknowledged with `ok`.
+    pub lines_acked: usize,
+    /// Original line number of the last line written.
+    pub last_sent_line: Option<usize>,
+    /// Original line number of the last line acknowledged with `ok`.
+    pub last_acked_line: Option<usize>,
+    /// Bytes sent and not yet answered (character counting's view of GRBL's RX buffer).
+    pub rx_bytes_in_flight: usize,
+    /// The character-counting budget (bytes).
+    pub rx_budget: usize,
+    /// Latest status report.
+    pub status: Option<StatusReport>,
+    /// Status reports received so far.
+    pub status_count: u64,
+    /// Latest work coordinate offset seen (`WCO:`).
+    pub wco: Option<Vec<f64>>,
+    /// Machine position from the latest report (mm).
+    pub machine_position: Option<Vec<f64>>,
+    /// Work position from the latest report (mm).
+    pub work_position: Option<Vec<f64>>,
+    /// Reset banners seen so far.
+    pub resets: u64,
+    /// Last `ALARM:N` code since the last reset or unlock.
+    pub alarm: Option<u8>,
+    /// Version from the last banner (`1.1h`).
+    pub version: Option<String>,
+}
+
+/// A discrete event from the controller or the link (through a `broadcast`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// A link came up.
+    Connected,
+    /// The link went down.
+    Disconnected(String),
+    /// Reset banner, with the version.
+    Banner(String),
+    /// `ALARM:N`.
+    Alarm(u8),
+    /// `error:N` to a line; `line` is the original program line number when it was a program
+    /// line.
+    Error {
+        /// The code.
+        code: u8,
+        /// Original program line number, if a program line.
+        line: Option<usize>,
+    },
+    /// `[MSG:...]`.
+    Message(String),
+    /// Another push message or an unrecognised line.
+    Other(String),
+}
+
+/// What stopped a stream.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Fault {
+    /// GRBL answered a program line with `error:code`.
+    Rejected {
+        /// Original line number.
+        line: usize,
+        /// The line as sent.
+        text: String,
+        /// Error code.
+        code: u8,
+        /// GRBL 1.1's message for the code.
+        message: &'static str,
+    },
+    /// GRBL raised `ALARM:code`.
+    Alarm {
+        /// Alarm code.
+        code: u8,
+        /// GRBL 1.1's message for the code.
+        message: &'static str,
+    },
+    /// A reset banner arrived that this client did not ask for.
+    UnexpectedReset,
+    /// The link closed or failed.
+    LinkLost(String),
+    /// [`GrblClient::abort`] was called.
+    Aborted,
+    /// The link task has ended (every client handle was dropped).
+    ClientGone,
+    /// Another stream is in progress.
+    Busy,
+    /// The start line is past the program's last line.
+    NoSuchLine(usize),
+}
+
+impl std::fmt::Display for Fault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Fault::Rejected {
+                line,
+                text,
+                code,
+                message,
+            } => write!(f, "line {line} ({text}): error:{code} {message}"),
+            Fault::Alarm { code, message } => write!(f, "ALARM:{code} {message}"),
+            Fault::UnexpectedReset => write!(f, "the controller reset unexpectedly"),
+            Fault::LinkLost(why) => write!(f, "link lost: {why}"),
+            Fault::Aborted => write!(f, "aborted"),
+            Fault::ClientGone => write!(f, "the link task has ended"),
+            Fault::Busy => write!(f, "another program is streaming"),
+            Fault::NoSuchLine(l) => write!(f, "line {l} is past the program's last line"),
+        }
+    }
+}
+
+/// What [`GrblClient::safe_stop`] did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SafeStopReport {
+    /// Everything written, in order: `"!"`, `"0x18"`, `"$X"`, `"M5"`.
+    pub sent: Vec<String>,
+    /// The hold came to a stop (`Hold:0`/`Idle`/`Alarm`/`Door`) before the reset.
+    pub stopped_before_reset: bool,
+    /// The reset banner arrived.
+    pub reset_confirmed: bool,
+    /// `M5` was acknowledged with `ok`.
+    pub heat_off_acked: bool,
+    /// State reported after the reset.
+    pub state_after: Option<MachineState>,
+    /// Steps that failed, in words.
+    pub problems: Vec<String>,
+}
+
+/// Why a stream stopped, with the line accounting an operator needs to resume.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StreamError {
+    /// What happened.
+    pub fault: Fault,
+    /// Original line number of the last line acknowledged with `ok`.
+    pub last_acked_line: Option<usize>,
+    /// Original line numbers of lines written but not acknowledged when the fault hit (the
+    /// ambiguous window after a link drop).
+    pub unacked_lines: Vec<usize>,
+    /// What the fault action did, when one ran.
+    pub safe_stop: Option<SafeStopReport>,
+}
+
+impl std::fmt::Display for StreamError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.fault)?;
+        match self.last_acked_line {
+            Some(l) => write!(f, "; last acknowledged line {l}")?,
+            None => write!(f, "; no line acknowledged")?,
+        }
+        if let (Some(a), Some(b)) = (self.unacked_lines.first(), self.unacked_lines.last()) {
+            write!(f, "; lines {a}-{b} sent but not acknowledged")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for StreamError {}
+
+/// Errors other than stream faults.
+#[derive(Debug, thiserror::Error)]
+pub enum ClientError {
+    /// Opening the link failed.
+    #[error("cannot connect to {target}: {source}")]
+    Connect {
+        /// Where.
+        target: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// No status report came back in time.
+    #[error("no status report from {target} within {timeout:?}")]
+    NoResponse {
+        /// Where.
+        target: String,
+        /// How long we waited.
+        timeout: Duration,
+    },
+    /// A job is already streaming.
+    #[error("a program is already streaming")]
+    Busy,
+    /// The link is down.
+    #[error("not connected")]
+    NotConnected,
+    /// The start line is past the program's end.
+    #[error("line {0} is past the program's last line")]
+    NoSuchLine(usize),
+    /// GRBL answered a command with `error:N`.
+    #[error("{command}: error:{code} {message}")]
+    Rejected {
+        /// The command.
+        command: String,
+        /// Code.
+        code: u8,
+        /// GRBL 1.1's message.
+        message: &'static str,
+    },
+    /// The command's line holds a real-time byte or a newline.
+    #[error("command {0:?} holds a newline or real-time byte")]
+    BadCommand(String),
+    /// The link task ended.
+    #[error("the link task has ended")]
+    Gone,
+}
+
+/// The answer to a command line.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CommandReply {
+    /// Push lines received while the command was the oldest unanswered line (`[GC:...]`,
+    /// `$n=v`, `[MSG:...]`), in order.
+    pub lines: Vec<String>,
+}
+
+/// A finished stream.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JobReport {
+    /// Lines streamed.
+    pub lines: usize,
+    /// Bytes written for them (`\n` included).
+    pub bytes: usize,
+    /// First and last original line numbers.
+    pub first_line: usize,
+    /// Last original line number.
+    pub last_line: usize,
+    /// Time from the first byte to the last `ok` (tokio clock).
+    pub stream_time: Duration,
+    /// Time until the machine was idle again.
+    pub total_time: Duration,
+}
+
+enum Cmd {
+    Stream {
+        program: Arc<Program>,
+        start: usize,
+        reply: oneshot::Sender<Result<JobReport, StreamError>>,
+    },
+    Line {
+        text: String,
+        reply: oneshot::Sender<Result<CommandReply, ClientError>>,
+    },
+    Realtime(Vec<Realtime>),
+    Abort,
+    Reconnect {
+        reply: oneshot::Sender<Result<(), ClientError>>,
+    },
+}
+
+enum Incoming {
+    Line(String),
+    Closed(String),
+}
+
+/// Handle to a GRBL link. Clone it freely; the link task stops when the last handle is dropped.
+#[derive(Clone)]
+pub struct GrblClient {
+    cmd: mpsc::Sender<Cmd>,
+    progress: watch::Receiver<Progress>,
+    events: broadcast::Sender<Event>,
+    config: Arc<ClientConfig>,
+    target: String,
+}
+
+impl std::fmt::Debug for GrblClient {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GrblClient")
+            .field("target", &self.target)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GrblClient {
+    /// Connects through `connector` and waits for the first status report (`?` is sent; nothing
+    /// is reset).
+    pub async fn connect(
+        connector: Arc<dyn Connect>,
+        config: ClientConfig,
+    ) -> Result<GrblClient, ClientError> {
+        let target = connector.describe();
+        let link = connector
+            .connect()
+            .await
+            .map_err(|source| ClientError::Connect {
+                target: target.clone(),
+                source,
+            })?;
+        let budget = match config.flow {
+            FlowControl::CharacterCounting => config.rx_buffer_bytes.saturating_sub(1),
+            FlowControl::SendResponse => usize::MAX,
+        };
+        let (cmd_tx, cmd_rx) = mpsc::channel(64);
+        let (progress_tx, progress_rx) = watch::channel(Progress {
+            rx_budget: budget,
+            ..Progress::default()
+        });
+        let (events, _) = broadcast::channel(256);
+        let (in_tx, in_rx) = mpsc::unbounded_channel();
+        let config = Arc::new(config);
+        let mut task = LinkTask {
+            config: config.clone(),
+            connector,
+            cmd_rx,
+            in_tx,
+            in_rx,
+            generation: 0,
+            writer: None,
+            reader: None,
+            progress: progress_tx,
+            events: events.clone(),
+            budget: RxBudget::new(budget),
+            sent: VecDeque::new(),
+            queued_cmds: VecDeque::new(),
+            job: None,
+            planner_size: 0,
+            out: Vec::new(),
+            hold_pending: false,
+            next_job: 1,
+        };
+        task.attach(link);
+        tokio::spawn(task.run());
+        let client = GrblClient {
+            cmd: cmd_tx,
+            progress: progress_rx,
+            events,
+            config,
+            target,
+        };
+        client.await_first_status(0).await?;
+        Ok(client)
+    }
+
+    async fn await_first_status(&self, after: u64) -> Result<(), ClientError> {
+        let timeout = self.config.connect_timeout;
+        let mut rx = self.progress.clone();
+        let wait = async {
+            loop {
+                let _ = self
+                    .cmd
+                    .send(Cmd::Realtime(vec![Realtime::StatusQuery]))
+                    .await;
+                let got = tokio::time::timeout(
+                    Duration::from_millis(500),
+                    rx.wait_for(|p| p.status_count > after),
+                )
+                .await;
+                match got {
+                    Ok(Ok(_)) => return Ok(()),
+                    Ok(Err(_)) => return Err(ClientError::Gone),
+                    Err(_) => continue,
+                }
+            }
+        };
+        match tokio::time::timeout(timeout, wait).await {
+            Ok(r) => r,
+            Err(_) => Err(ClientError::NoResponse {
+                target: self.target.clone(),
+                timeout,
+            }),
+        }
+    }
+
+    /// A receiver of the link task's progress (for the node's feedback and `MachineStatus`).
+    pub fn progress(&self) -> watch::Receiver<Progress> {
+        self.progress.clone()
+    }
+
+    /// A receiver of discrete events (alarms, errors, messages, link changes).
+    pub fn events(&self) -> broadcast::Receiver<Event> {
+        self.events.subscribe()
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &ClientConfig {
+        &self.config
+    }
+
+    /// Streams the whole program; see [`GrblClient::stream_from`].
+    pub async fn stream(&self, program: &Program) -> Result<JobReport, StreamError> {
+        match program.lines().first() {
+            Some(l) => self.stream_from(program, l.number).await,
+            None => Ok(JobReport {
+                lines: 0,
+                bytes: 0,
+                first_line: 0,
+                last_line: 0,
+                stream_time: Duration::ZERO,
+                total_time: Duration::ZERO,
+            }),
+        }
+    }
+
+    /// Streams the program from original line `from_line` (a dropped comment/blank line starts
+    /// at the next kept line) to the end, and returns once every line is acknowledged and the
+    /// machine is idle again. On a fault, runs [`ClientConfig::on_fault`] and returns the fault
+    /// with its line accounting.
+    pub async fn stream_from(
+        &self,
+        program: &Program,
+        from_line: usize,
+    ) -> Result<JobReport, StreamError> {
+        let plain = |fault: Fault| StreamError {
+            fault,
+            last_acked_line: None,
+            unacked_lines: Vec::new(),
+            safe_stop: None,
+        };
+        let Some(start) = program.index_of_line(from_line) else {
+            return Err(plain(Fault::NoSuchLine(from_line)));
+        };
+        let (tx, rx) = oneshot::channel();
+        let cmd = Cmd::Stream {
+            program: Arc::new(program.clone()),
+            start,
+            reply: tx,
+        };
+        if self.cmd.send(cmd).await.is_err() {
+            return Err(plain(Fault::ClientGone));
+        }
+        let result = rx.await.unwrap_or_else(|_| Err(plain(Fault::ClientGone)));
+        match result {
+            Ok(r) => Ok(r),
+            Err(mut e) => {
+                let act = !matches!(
+                    e.fault,
+                    Fault::LinkLost(_) | Fault::ClientGone | Fault::Busy | Fault::NoSuchLine(_)
+                ) && self.config.on_fault == FaultAction::SafeStop;
+                if act {
+                    e.safe_stop = Some(self.safe_stop().await);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Sends one command line (`$X`, `$G`, `M5`, `G0 X0`) and waits for its `ok`.
+    pub async fn command(&self, text: &str) -> Result<CommandReply, ClientError> {
+        let t = text.trim();
+        if t.bytes()
+            .any(|b| b == b'\n' || b == b'\r' || Realtime::from_byte(b).is_some())
+        {
+            return Err(ClientError::BadCommand(t.to_string()));
+        }
+        let (tx, rx) = oneshot::channel();
+        self.cmd
+            .send(Cmd::Line {
+                text: t.to_string(),
+                reply: tx,
+            })
+            .await
+            .map_err(|_| ClientError::Gone)?;
+        rx.await.unwrap_or(Err(ClientError::Gone))
+    }
+
+    /// Writes real-time bytes now, ahead of anything else the link task has to do.
+    pub async fn realtime(&self, commands: &[Realtime]) -> Result<(), ClientError> {
+        self.cmd
+            .send(Cmd::Realtime(commands.to_vec()))
+            .await
+            .map_err(|_| ClientError::Gone)
+    }
+
+    /// Feed hold (`!`).
+    pub async fn hold(&self) -> Result<(), ClientError> {
+        self.realtime(&[Realtime::FeedHold]).await
+    }
+
+    /// Cycle start / resume (`~`).
+    pub async fn resume(&self) -> Result<(), ClientError> {
+        self.realtime(&[Realtime::CycleStart]).await
+    }
+
+    /// Soft reset (0x18). A stream in progress ends with [`Fault::UnexpectedReset`] unless the
+    /// reset is part of [`GrblClient::abort`] or [`GrblClient::safe_stop`].
+    pub async fn soft_reset(&self) -> Result<(), ClientError> {
+        self.realtime(&[Realtime::SoftReset]).await
+    }
+
+    /// Jog cancel (0x85).
+    pub async fn jog_cancel(&self) -> Result<(), ClientError> {
+        self.realtime(&[Realtime::JogCancel]).await
+    }
+
+    /// Sets the feed override to `pct` (10-200 %), stepping from the last reported value.
+    pub async fn feed_override(&self, pct: u16) -> Result<(), ClientError> {
+        let cur = self.current_override(|o| o.feed_pct);
+        self.realtime(&override_steps(OverrideKind::Feed, cur, pct))
+            .await
+    }
+
+    /// Sets the spindle (heat) override to `pct` (10-200 %).
+    pub async fn spindle_override(&self, pct: u16) -> Result<(), ClientError> {
+        let cur = self.current_override(|o| o.spindle_pct);
+        self.realtime(&override_steps(OverrideKind::Spindle, cur, pct))
+            .await
+    }
+
+    fn current_override(&self, pick: impl Fn(&crate::protocol::Overrides) -> u16) -> u16 {
+        self.progress
+            .borrow()
+            .status
+            .as_ref()
+            .and_then(|s| s.overrides.as_ref())
+            .map_or(100, pick)
+    }
+
+    /// Emergency stop of a stream: writes `!` at once and stops sending; the stream call then
+    /// returns [`Fault::Aborted`] after its fault action. Without a stream, runs
+    /// [`GrblClient::safe_stop`] directly.
+    pub async fn abort(&self) -> Result<Option<SafeStopReport>, ClientError> {
+        let streaming = self.progress.borrow().streaming;
+        self.cmd
+            .send(Cmd::Abort)
+            .await
+            .map_err(|_| ClientError::Gone)?;
+        if streaming {
+            Ok(None)
+        } else {
+            Ok(Some(self.safe_stop().await))
+        }
+    }
+
+    /// Feed hold, soft reset, heat off (see the module documentation for the exact sequence).
+    pub async fn safe_stop(&self) -> SafeStopReport {
+        let mut report = SafeStopReport::default();
+        let mut rx = self.progress.clone();
+        if self.hold().await.is_err() {
+            report.problems.push("link task gone".into());
+            return report;
+        }
+        report.sent.push("!".into());
+        // 1. Wait for the hold to stop the machine.
+        let stopped = self
+            .poll_until(self.config.hold_timeout, |p| {
+                matches!(
+                    p.status.as_ref().and_then(|s| s.state),
+                    Some(
+                        MachineState::Hold(0)
+                            | MachineState::Idle
+                            | MachineState::Alarm
+                            | MachineState::Door(_)
+                            | MachineState::Check
+                    )
+                )
+            })
+            .await;
+        report.stopped_before_reset = stopped;
+        if !stopped {
+            report
+                .problems
+                .push("no stop reported before the reset".into());
+        }
+        // 2. Soft reset.
+        let resets = rx.borrow_and_update().resets;
+        let _ = self.cmd.send(Cmd::Abort).await;
+        if self.soft_reset().await.is_err() {
+            report.problems.push("link task gone".into());
+            return report;
+        }
+        report.sent.push("0x18".into());
+        report.reset_confirmed = matches!(
+            tokio::time::timeout(
+                self.config.reset_timeout,
+                rx.wait_for(|p| p.resets > resets)
+            )
+            .await,
+            Ok(Ok(_))
+        );
+        if !report.reset_confirmed {
+            report.problems.push("no banner after the reset".into());
+        }
+        let seen = rx.borrow_and_update().status_count;
+        let _ = self
+            .poll_until(self.config.reset_timeout, |p| p.status_count > seen)
+            .await;
+        let mut state = rx.borrow().status.as_ref().and_then(|s| s.state);
+        // 3. Heat off.
+        if state == Some(MachineState::Alarm) && self.config.unlock_after_reset {
+            report.sent.push("$X".into());
+            match self.command("$X").await {
+                Ok(_) => state = Some(MachineState::Idle),
+                Err(e) => report.problems.push(format!("$X: {e}")),
+            }
+        }
+        if state != Some(MachineState::Alarm) {
+            report.sent.push("M5".into());
+            match self.command("M5").await {
+                Ok(_) => report.heat_off_acked = true,
+                Err(e) => report.problems.push(format!("M5: {e}")),
+            }
+        } else {
+            report
+                .problems
+                .push("controller in alarm after the reset: M5 not sent (the reset already switched the spindle off)".into());
+        }
+        report.state_after = state;
+        report
+    }
+
+    /// Sends `?` every 50 ms (tokio time) until `pred` holds or `timeout` passes.
+    async fn poll_until(&self, timeout: Duration, pred: impl Fn(&Progress) -> bool) -> bool {
+        let mut rx = self.progress.clone();
+        let deadline = Instant::now() + timeout;
+        loop {
+            if pred(&rx.borrow_and_update()) {
+                return true;
+            }
+            if Instant::now() >= deadline {
+                return false;
+            }
+            if self.realtime(&[Realtime::StatusQuery]).await.is_err() {
+                return false;
+            }
+            let _ = tokio::time::timeout(Duration::from_millis(50), rx.changed()).await;
+        }
+    }
+
+    /// Re-opens the link after a drop (or at any time) and waits for a status report. The
+    /// controller is not reset; the returned progress holds the last acknowledged line.
+    pub async fn reconnect(&self) -> Result<Progress, ClientError> {
+        let seen = self.progress.borrow().status_count;
+        let (tx, rx) = oneshot::channel();
+        self.cmd
+            .send(Cmd::Reconnect { reply: tx })
+            .await
+            .map_err(|_| ClientError::Gone)?;
+        rx.await.unwrap_or(Err(ClientError::Gone))?;
+        self.await_first_status(seen).await?;
+        Ok(self.progress.borrow().clone())
+    }
+}
+
+enum Sent {
+    Program {
+        index: usize,
+        job: u64,
+    },
+    Command {
+        text: String,
+        reply: Option<oneshot::Sender<Result<CommandReply, ClientError>>>,
+        lines: Vec<String>,
+    },
+}
+
+struct SentEntry {
+    what: Sent,
+}
+
+struct Job {
+    id: u64,
+    program: Arc<Program>,
+    start: usize,
+    next: usize,
+    acked: usize,
+    bytes: usize,
+    reply: Option<oneshot::Sender<Result<JobReport, StreamError>>>,
+    started: Instant,
+    all_acked_at: Option<(Instant, u64)>,
+    resetting: bool,
+}
+
+struct LinkTask {
+    config: Arc<ClientConfig>,
+    connector: Arc<dyn Connect>,
+    cmd_rx: mpsc::Receiver<Cmd>,
+    in_tx: mpsc::UnboundedSender<(u64, Incoming)>,
+    in_rx: mpsc::UnboundedReceiver<(u64, Incoming)>,
+    generation: u64,
+    writer: Option<WriteHalf<BoxedTransport>>,
+    reader: Option<JoinHandle<()>>,
+    progress: watch::Sender<Progress>,
+    events: broadcast::Sender<Event>,
+    budget: RxBudget,
+    sent: VecDeque<SentEntry>,
+    queued_cmds: VecDeque<(String, oneshot::Sender<Result<CommandReply, ClientError>>)>,
+    job: Option<Job>,
+    planner_size: u16,
+    out: Vec<u8>,
+    hold_pending: bool,
+    next_job: u64,
+}
+
+impl LinkTask {
+    fn attach(&mut self, link: BoxedTransport) {
+        if let Some(r) = self.reader.take() {
+            r.abort();
+        }
+        self.generation += 1;
+        let generation = self.generation;
+        let (mut rd, wr) = tokio::io::split(link);
+        self.writer = Some(wr);
+        let tx = self.in_tx.clone();
+        self.reader = Some(tokio::spawn(async move {
+            let mut buf = vec![0u8; 4096];
+            let mut line: Vec<u8> = Vec::with_capacity(128);
+            loop {
+                match rd.read(&mut buf).await {
+                    Ok(0) => {
+                        let _ = tx.send((generation, Incoming::Closed("end of stream".into())));
+                        return;
+                    }
+                    Err(e) => {
+                        let _ = tx.send((generation, Incoming::Closed(e.to_string())));
+                        return;
+                    }
+                    Ok(n) => {
+                        for &b in &buf[..n] {
+                            if b == b'\n' {
+                                let text = String::from_utf8_lossy(&line)
+                                    .trim_end_matches('\r')
+                                    .to_string();
+                                line.clear();
+                                if tx.send((generation, Incoming::Line(text))).is_err() {
+                                    return;
+                                }
+                            } else if line.len() < 4096 {
+                                line.push(b);
+                            }
+                        }
+                    }
+                }
+            }
+        }));
+        self.budget.clear();
+        self.progress.send_modify(|p| {
+            p.connected = true;
+            p.connections += 1;
+            p.rx_bytes_in_flight = 0;
+        });
+        let _ = self.events.send(Event::Connected);
+    }
+
+    async fn run(mut self) {
+        let mut poll = tokio::time::interval(self.config.status_period);
+        poll.set_missed_tick_behavior(MissedTickBehavior::Delay);
+        loop {
+            self.pump().await;
+            tokio::select! {
+                biased;
+                cmd = self.cmd_rx.recv() => match cmd {
+                    None => break,
+                    Some(c) => self.on_cmd(c).await,
+                },
+                msg = self.in_rx.recv() => match msg {
+                    None => break,
+                    Some((g, m)) if g == self.generation => self.on_incoming(m).await,
+                    Some(_) => {}
+                },
+                _ = poll.tick() => {
+                    if self.writer.is_some() {
+                        self.write_now(&[Realtime::StatusQuery.byte()]).await;
+                    }
+                }
+            }
+        }
+        if let Some(r) = self.reader.take() {
+            r.abort();
+        }
+    }
+
+    /// Writes bytes now; a write failure is a link loss.
+    async fn write_now(&mut self, bytes: &[u8]) {
+        let Some(w) = self.writer.as_mut() else {
+            return;
+        };
+        let r = async {
+            w.write_all(bytes).await?;
+            w.flush().await
+        }
+        .await;
+        if let Err(e) = r {
+            self.link_lost(e.to_string());
+        }
+    }
+
+    async fn on_cmd(&mut self, cmd: Cmd) {
+        match cmd {
+            Cmd::Realtime(rts) => {
+                let bytes: Vec<u8> = rts.iter().map(|r| r.byte()).collect();
+                if rts.contains(&Realtime::SoftReset) {
+                    if let Some(job) = self.job.as_mut() {
+                        job.resetting = true;
+                    }
+                }
+                self.write_now(&bytes).await;
+            }
+            Cmd::Line { text, reply } => {
+                if self.writer.is_none() {
+                    let _ = reply.send(Err(ClientError::NotConnected));
+                } else {
+                    self.queued_cmds.push_back((text, reply));
+                }
+            }
+            Cmd::Stream {
+                program,
+                start,
+                reply,
+            } => {
+                if self.job.as_ref().is_some_and(|j| j.reply.is_some()) {
+                    let _ = reply.send(Err(StreamError {
+                        fault: Fault::Busy,
+                        last_acked_line: None,
+                        unacked_lines: vec![],
+                        safe_stop: None,
+                    }));
+                    return;
+                }
+                if self.writer.is_none() {
+                    let _ = reply.send(Err(StreamError {
+                        fault: Fault::LinkLost("not connected".into()),
+                        last_acked_line: self.progress.borrow().last_acked_line,
+                        unacked_lines: vec![],
+                        safe_stop: None,
+                    }));
+                    return;
+                }
+                let id = self.next_job;
+                self.next_job += 1;
+                let total = program.len() - start;
+                self.progress.send_modify(|p| {
+                    p.streaming = true;
+                    p.lines_total = total;
+                    p.lines_sent = 0;
+                    p.lines_acked = 0;
+                    p.last_sent_line = None;
+                });
+                self.job = Some(Job {
+                    id,
+                    program,
+                    start,
+                    next: start,
+                    acked: 0,
+                    bytes: 0,
+                    reply: Some(reply),
+                    started: Instant::now(),
+                    all_acked_at: None,
+                    resetting: false,
+                });
+            }
+            Cmd::Abort => {
+                if self.job.as_ref().is_some_and(|j| j.reply.is_some()) {
+                    self.write_now(&[Realtime::FeedHold.byte()]).await;
+                    self.fail_job(Fault::Aborted);
+                }
+                if let Some(job) = self.job.as_mut() {
+                    job.resetting = true;
+                }
+            }
+            Cmd::Reconnect { reply } => {
+                if let Some(r) = self.reader.take() {
+                    r.abort();
+                }
+                if let Some(mut w) = self.writer.take() {
+                    let _ = w.shutdown().await;
+                }
+                let mut last = None;
+                for attempt in 0..self.config.reconnect_attempts.max(1) {
+                    if attempt > 0 {
+                        tokio::time::sleep(self.config.reconnect_delay).await;
+                    }
+                    match self.connector.connect().await {
+                        Ok(link) => {
+                            self.link_lost_cleanup();
+                            self.attach(link);
+                            last = None;
+                            break;
+                        }
+                        Err(e) => last = Some(e),
+                    }
+                }
+                let _ = reply.send(match last {
+                    None => Ok(()),
+                    Some(source) => Err(ClientError::Connect {
+                        target: self.connector.describe(),
+                        source,
+                    }),
+                });
+            }
+        }
+    }
+
+    /// Writes as many queued commands and program lines as the flow control allows.
+    async fn pump(&mut self) {
+        if self.writer.is_none() {
+            return;
+        }
+        if std::mem::take(&mut self.hold_pending) {
+            self.write_now(&[Realtime::FeedHold.byte()]).await;
+        }
+        self.out.clear();
+        let char_counting = self.config.flow == FlowControl::CharacterCounting;
+        loop {
+            let can = |budget: &RxBudget, sent: usize, len: usize| {
+                if char_counting {
+                    budget.fits(len)
+                } else {
+                    sent == 0
+                }
+            };
+            if let Some((text, _)) = self.queued_cmds.front() {
+                let len = text.len() + 1;
+                if !can(&self.budget, self.sent.len(), len) {
+                    break;
+                }
+                let Some((text, reply)) = self.queued_cmds.pop_front() else {
+                    break;
+                };
+                self.out.extend_from_slice(text.as_bytes());
+                self.out.push(b'\n');
+                self.budget.sent(len);
+                self.sent.push_back(SentEntry {
+                    what: Sent::Command {
+                        text,
+                        reply: Some(reply),
+                        lines: Vec::new(),
+                    },
+                });
+                continue;
+            }
+            let Some(job) = self.job.as_mut() else { break };
+            if job.reply.is_none() || job.next >= job.program.len() {
+                break;
+            }
+            let line = &job.program.lines()[job.next];
+            let len = line.wire_len();
+            if !can(&self.budget, self.sent.len(), len) {
+                break;
+            }
+            self.out.extend_from_slice(line.text.as_bytes());
+            self.out.push(b'\n');
+            self.budget.sent(len);
+            self.sent.push_back(SentEntry {
+                what: Sent::Program {
+                    index: job.next,
+                    job: job.id,
+                },
+            });
+            job.bytes += len;
+            let number = line.number;
+            job.next += 1;
+            let sent_count = job.next - job.start;
+            self.progress.send_modify(|p| {
+                p.lines_sent = sent_count;
+                p.last_sent_line = Some(number);
+            });
+        }
+        if !self.out.is_empty() {
+            let out = std::mem::take(&mut self.out);
+            self.write_now(&out).await;
+            self.out = out;
+            let used = self.budget.used();
+            self.progress.send_modify(|p| p.rx_bytes_in_flight = used);
+        }
+    }
+
+    fn unacked_lines(&self) -> Vec<usize> {
+        let Some(job) = &self.job else {
+            return vec![];
+        };
+        self.sent
+            .iter()
+            .filter_map(|e| match e.what {
+                Sent::Program { index, job: id } if id == job.id => {
+                    Some(job.program.lines()[index].number)
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Ends the current job with `fault` (no further line is sent). The entries already sent
+    /// stay in the answer queue, so later answers are still matched to their lines.
+    fn fail_job(&mut self, fault: Fault) {
+        let unacked = self.unacked_lines();
+        let last = self.progress.borrow().last_acked_line;
+        if let Some(job) = self.job.as_mut() {
+            if let Some(reply) = job.reply.take() {
+                let _ = reply.send(Err(StreamError {
+                    fault,
+                    last_acked_line: last,
+                    unacked_lines: unacked,
+                    safe_stop: None,
+                }));
+            }
+        }
+        self.progress.send_modify(|p| p.streaming = false);
+    }
+
+    fn link_lost(&mut self, why: String) {
+        if self.writer.is_none() {
+            return;
+        }
+        self.writer = None;
+        if let Some(r) = self.reader.take() {
+            r.abort();
+        }
+        let _ = self.events.send(Event::Disconnected(why.clone()));
+        self.fail_job(Fault::LinkLost(why));
+        self.link_lost_cleanup();
+        self.progress.send_modify(|p| {
+            p.connected = false;
+            p.rx_bytes_in_flight = 0;
+        });
+    }
+
+    fn link_lost_cleanup(&mut self) {
+        self.job = None;
+        self.budget.clear();
+        for e in self.sent.drain(..) {
+            if let Sent::Command { reply: Some(r), .. } = e.what {
+                let _ = r.send(Err(ClientError::NotConnected));
+            }
+        }
+        for (_, r) in self.queued_cmds.drain(..) {
+            let _ = r.send(Err(ClientError::NotConnected));
+        }
+    }
+
+    async fn on_incoming(&mut self, msg: Incoming) {
+        let line = match msg {
+            Incoming::Closed(why) => {
+                self.link_lost(why);
+                return;
+            }
+            Incoming::Line(l) => l,
+        };
+        if line.trim().is_empty() {
+            return;
+        }
+        match parse_response(&line) {
+            Response::Ok => self.answered(None),
+            Response::Error(code) => self.answered(Some(code)),
+            Response::Alarm(code) => {
+                let _ = self.events.send(Event::Alarm(code));
+                self.progress.send_modify(|p| p.alarm = Some(code));
+                if self.job.as_ref().is_some_and(|j| !j.resetting) {
+                    self.write_now(&[Realtime::FeedHold.byte()]).await;
+                }
+                if self.job.as_ref().is_some_and(|j| j.reply.is_some()) {
+                    self.fail_job(Fault::Alarm {
+                        code,
+                        message: alarm_message(code),
+                    });
+                }
+            }
+            Response::Status(s) => self.on_status(s),
+            Response::Banner(version) => {
+                let _ = self.events.send(Event::Banner(version.clone()));
+                // GRBL flushed its RX buffer: nothing sent before is going to be answered.
+                if let Some(resetting) = self
+                    .job
+                    .as_ref()
+                    .filter(|j| j.reply.is_some())
+                    .map(|j| j.resetting)
+                {
+                    self.fail_job(if resetting {
+                        Fault::Aborted
+                    } else {
+                        Fault::UnexpectedReset
+                    });
+                }
+                for e in self.sent.drain(..) {
+                    if let Sent::Command {
+                        reply: Some(r),
+                        text,
+                        ..
+                    } = e.what
+                    {
+                        let _ = r.send(Err(ClientError::Rejected {
+                            command: text,
+                            code: 0,
+                            message: "controller reset before answering",
+                        }));
+                    }
+                }
+                self.budget.clear();
+                self.job = None;
+                self.progress.send_modify(|p| {
+                    p.resets += 1;
+                    p.version = Some(version);
+                    p.rx_bytes_in_flight = 0;
+                    p.streaming = false;
+                    if p.alarm != Some(3) {
+                        p.alarm = None;
+                    }
+                });
+            }
+            Response::Message(m) => {
+                if m.contains("Unlocked") {
+                    self.progress.send_modify(|p| p.alarm = None);
+                }
+                self.collect(&line);
+                let _ = self.events.send(Event::Message(m));
+            }
+            Response::Feedback { .. } | Response::Setting { .. } | Response::StartupLine(_) => {
+                self.collect(&line);
+            }
+            Response::Other(o) => {
+                let _ = self.events.send(Event::Other(o));
+            }
+        }
+    }
+
+    /// Push lines belong to the command at the head of the answer queue, if any.
+    fn collect(&mut self, line: &str) {
+        if let Some(SentEntry {
+            what: Sent::Command { lines, .. },
+            ..
+        }) = self.sent.front_mut()
+        {
+            lines.push(line.to_string());
+        }
+    }
+
+    fn answered(&mut self, error: Option<u8>) {
+        let Some(entry) = self.sent.pop_front() else {
+            let _ = self.events.send(Event::Other(format!(
+                "answer with nothing outstanding: {}",
+                error.map_or("ok".to_string(), |c| format!("error:{c}"))
+            )));
+            return;
+        };
+        self.budget.answered();
+        let used = self.budget.used();
+        match entry.what {
+            Sent::Command { text, reply, lines } => {
+                if let Some(r) = reply {
+                    let _ = r.send(match error {
+                        None => Ok(CommandReply { lines }),
+                        Some(code) => Err(ClientError::Rejected {
+                            command: text,
+                            code,
+                            message: error_message(code),
+                        }),
+                    });
+                }
+                if let Some(code) = error {
+                    let _ = self.events.send(Event::Error { code, line: None });
+                }
+                self.progress.send_modify(|p| p.rx_bytes_in_flight = used);
+            }
+            Sent::Program { index, job } => {
+                let Some(j) = self.job.as_mut().filter(|j| j.id == job) else {
+                    self.progress.send_modify(|p| p.rx_bytes_in_flight = used);
+                    return;
+                };
+                let line = &j.program.lines()[index];
+                let number = line.number;
+                match error {
+                    None => {
+                        j.acked += 1;
+                        let acked = j.acked;
+                        let all = j.next >= j.program.len() && acked == j.next - j.start;
+                        if all && j.all_acked_at.is_none() {
+                            let seq = self.progress.borrow().status_count;
+                            j.all_acked_at = Some((Instant::now(), seq));
+                        }
+                        self.progress.send_modify(|p| {
+                            p.lines_acked = acked;
+                            p.last_acked_line = Some(number);
+                            p.rx_bytes_in_flight = used;
+                        });
+                    }
+                    Some(code) => {
+                        let text = line.text.clone();
+                        let _ = self.events.send(Event::Error {
+                            code,
+                            line: Some(number),
+                        });
+                        self.progress.send_modify(|p| p.rx_bytes_in_flight = used);
+                        if j.reply.is_some() {
+                            // Hold at once: the link task writes `!` before anything else.
+                            self.hold_pending = true;
+                            self.fail_job(Fault::Rejected {
+                                line: number,
+                                text,
+                                code,
+                                message: error_message(code),
+                            });
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn on_status(&mut self, s: StatusReport) {
+        if let Some(b) = s.buffer {
+            self.planner_size = self.planner_size.max(b.planner_free);
+        }
+        let state = s.state;
+        let planner_empty = s.buffer.is_none_or(|b| b.planner_free >= self.planner_size);
+        self.progress.send_modify(|p| {
+            if let Some(w) = &s.wco {
+                p.wco = Some(w.clone());
+            }
+            p.machine_position = s.machine_position(p.wco.as_deref());
+            p.work_position = s.work_position(p.wco.as_deref());
+            p.status_count += 1;
+            p.status = Some(s);
+        });
+        let count = self.progress.borrow().status_count;
+        // A finished job ends at the first report after its last `ok` that shows the machine
+        // idle with an empty planner.
+        let done = self.job.as_ref().is_some_and(|j| {
+            j.reply.is_some()
+                && j.all_acked_at.is_some_and(|(_, seq)| count > seq)
+                && state == Some(MachineState::Idle)
+                && planner_empty
+        });
+        if done {
+            if let Some(mut j) = self.job.take() {
+                let (acked_at, _) = j.all_acked_at.unwrap_or((Instant::now(), 0));
+                let lines = j.next - j.start;
+                let report = JobReport {
+                    lines,
+                    bytes: j.bytes,
+                    first_line: j.program.lines()[j.start].number,
+                    last_line: j.program.lines()[j.next - 1].number,
+                    stream_time: acked_at.duration_since(j.started),
+                    total_time: j.started.elapsed(),
+                };
+                if let Some(r) = j.reply.take() {
+                    let _ = r.send(Ok(report));
+                }
+            }
+            self.progress.send_modify(|p| p.streaming = false);
+        }
+    }
+}
