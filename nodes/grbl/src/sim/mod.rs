@@ -637,6 +637,16 @@ impl Machine {
         loop {
             let now = self.clock.now().max(self.t);
             self.advance(now);
+            // Events due within the clock's resolution are run now: sleeping until an instant
+            // that has (after rounding) already passed would spin without time advancing.
+            for _ in 0..1000 {
+                match self.next_event() {
+                    Some(t) if self.clock.instant_at(t) <= Instant::now() => {
+                        self.advance(t.max(self.t))
+                    }
+                    _ => break,
+                }
+            }
             self.publish();
             let next = self.next_event();
             let sleep = next.map(|t| self.clock.instant_at(t));
@@ -831,7 +841,8 @@ impl Machine {
         let r = b.remaining_mm;
         if decel {
             if v * v >= 2.0 * a * r {
-                Some(self.t + (v - (v * v - 2.0 * a * r).max(0.0).sqrt()) / a)
+                // (v - sqrt(v² - 2ar)) / a, in the form that does not cancel for small r.
+                Some(self.t + 2.0 * r / (v + (v * v - 2.0 * a * r).max(0.0).sqrt()))
             } else {
                 Some(self.t + v / a)
             }
