@@ -8,6 +8,8 @@
 //! - [`stream`]: the streaming client ([`stream::GrblClient`]).
 //! - [`sim`]: the simulator.
 
+#![warn(missing_docs)]
+
 pub mod program;
 pub mod protocol;
 pub mod sim;

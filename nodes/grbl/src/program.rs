@@ -21,19 +21,11 @@ impl ProgramLine {
 }
 
 /// How a program's text is cleaned before streaming.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct CleanOptions {
     /// Remove every space and tab inside a line too (GRBL ignores them; fewer bytes to send).
     /// Off by default, so the sent text stays readable in logs.
     pub strip_whitespace: bool,
-}
-
-impl Default for CleanOptions {
-    fn default() -> Self {
-        CleanOptions {
-            strip_whitespace: false,
-        }
-    }
 }
 
 /// Why a program cannot be streamed; every variant names the original line.
@@ -251,7 +243,7 @@ mod tests {
                 byte: b'!'
             })
         );
-        let long = format!("G1 X{}", "1".repeat(76));
+        let long = format!("G1 X{}", "1".repeat(77));
         assert!(matches!(
             Program::parse(&long, CleanOptions::default()),
             Err(ProgramError::TooLong {

@@ -329,7 +329,7 @@ pub struct StreamError {
     /// ambiguous window after a link drop).
     pub unacked_lines: Vec<usize>,
     /// What the fault action did, when one ran.
-    pub safe_stop: Option<SafeStopReport>,
+    pub safe_stop: Option<Box<SafeStopReport>>,
 }
 
 impl std::fmt::Display for StreamError {
@@ -615,7 +615,7 @@ impl GrblClient {
                     Fault::LinkLost(_) | Fault::ClientGone | Fault::Busy | Fault::NoSuchLine(_)
                 ) && self.config.on_fault == FaultAction::SafeStop;
                 if act {
-                    e.safe_stop = Some(self.safe_stop().await);
+                    e.safe_stop = Some(Box::new(self.safe_stop().await));
                 }
                 Err(e)
             }
@@ -1415,5 +1415,58 @@ impl LinkTask {
             }
             self.progress.send_modify(|p| p.streaming = false);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_budget_counts_every_byte_and_frees_in_order() {
+        // GRBL's 128-byte ring holds 127 bytes.
+        let mut b = RxBudget::new(RX_BUFFER_SIZE - 1);
+        assert!(b.fits(127));
+        assert!(!b.fits(128));
+        b.sent(60); // "G1 X..." 59 characters + \n
+        b.sent(60);
+        assert_eq!(b.used(), 120);
+        assert!(b.fits(7));
+        assert!(!b.fits(8), "one byte more would overflow GRBL's buffer");
+        assert_eq!(b.answered(), Some(60));
+        assert_eq!(b.outstanding(), 1);
+        assert!(b.fits(67));
+        b.sent(67);
+        assert_eq!(b.used(), 127);
+        assert_eq!(b.answered(), Some(60));
+        assert_eq!(b.answered(), Some(67));
+        assert_eq!(
+            b.answered(),
+            None,
+            "an answer with nothing outstanding is not counted"
+        );
+        assert_eq!(b.used(), 0);
+        b.sent(10);
+        b.clear();
+        assert_eq!((b.used(), b.outstanding(), b.capacity()), (0, 0, 127));
+    }
+
+    #[test]
+    fn stream_errors_read_as_one_line() {
+        let e = StreamError {
+            fault: Fault::Rejected {
+                line: 42,
+                text: "G1 X5 Q3".into(),
+                code: 20,
+                message: error_message(20),
+            },
+            last_acked_line: Some(41),
+            unacked_lines: vec![43, 44, 45],
+            safe_stop: None,
+        };
+        assert_eq!(
+            e.to_string(),
+            "line 42 (G1 X5 Q3): error:20 Unsupported command; last acknowledged line 41; lines 43-45 sent but not acknowledged"
+        );
     }
 }

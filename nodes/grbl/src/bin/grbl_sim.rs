@@ -1,1 +1,152 @@
-fn main() {}
+//! `grbl_sim`: the GRBL 1.1 protocol simulator as a process, on TCP or a pseudo-terminal, so a
+//! person can point Universal G-code Sender, bCNC or `machine_bridge` at it.
+//!
+//! ```text
+//! grbl_sim --tcp 127.0.0.1:2323              # telnet-style, like FluidNC
+//! grbl_sim --pty --link /tmp/grbl            # serial-style; open /tmp/grbl at 115200
+//! grbl_sim --tcp 127.0.0.1:2323 --drop-at-line 500 --ack-delay-ms 5 --log executed.nc
+//! ```
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use cell_grbl::sim::{self, Faults, SimConfig, SimEvent};
+use clap::Parser;
+
+/// GRBL 1.1 protocol simulator (128-byte RX buffer, 15-block planner, simulated motion).
+#[derive(Debug, Parser)]
+#[command(name = "grbl_sim", version)]
+struct Args {
+    /// Listen for TCP connections on this address (each new connection replaces the last).
+    #[arg(long, value_name = "ADDR", conflicts_with = "pty")]
+    tcp: Option<String>,
+    /// Create a pseudo-terminal and print its device path.
+    #[arg(long)]
+    pty: bool,
+    /// With --pty: also make this symlink to the pty's device.
+    #[arg(long, value_name = "PATH", requires = "pty")]
+    link: Option<PathBuf>,
+    /// Simulated seconds per real second.
+    #[arg(long, default_value_t = 1.0)]
+    time_scale: f64,
+    /// Link baud rate (8N1); 0 for an unthrottled link.
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
+    /// Axis letters in report order.
+    #[arg(long, default_value = "XYZ")]
+    axes: String,
+    /// Rapid rate (mm/min).
+    #[arg(long, default_value_t = 3000.0)]
+    rapid_mm_min: f64,
+    /// Drop the link when this G-code line (count since start) arrives.
+    #[arg(long, value_name = "N")]
+    drop_at_line: Option<u64>,
+    /// Raise ALARM:CODE when the move of G-code line N starts, as N:CODE.
+    #[arg(long, value_name = "N:CODE", value_parser = parse_pair)]
+    alarm_at_line: Option<(u64, u8)>,
+    /// Answer G-code line N with error:CODE, as N:CODE.
+    #[arg(long, value_name = "N:CODE", value_parser = parse_pair)]
+    error_at_line: Option<(u64, u8)>,
+    /// Simulated milliseconds spent on each line before answering.
+    #[arg(long, default_value_t = 0.0)]
+    ack_delay_ms: f64,
+    /// Write the executed-line log here on exit (Ctrl-C).
+    #[arg(long, value_name = "PATH")]
+    log: Option<PathBuf>,
+}
+
+fn parse_pair(s: &str) -> Result<(u64, u8), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("expected N:CODE, got {s:?}"))?;
+    Ok((
+        a.parse().map_err(|e| format!("{a:?}: {e}"))?,
+        b.parse().map_err(|e| format!("{b:?}: {e}"))?,
+    ))
+}
+
+#[tokio::main(flavor = "current_thread")]
+async fn main() -> ExitCode {
+    let args = Args::parse();
+    match run(args).await {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("grbl_sim: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+async fn run(args: Args) -> Result<(), String> {
+    let axes: Vec<char> = args.axes.chars().map(|c| c.to_ascii_uppercase()).collect();
+    if axes.is_empty() || axes.iter().any(|c| !"XYZABCUVW".contains(*c)) {
+        return Err(format!(
+            "--axes {:?}: use letters from XYZABCUVW",
+            args.axes
+        ));
+    }
+    if args.time_scale <= 0.0 || !args.time_scale.is_finite() {
+        return Err("--time-scale must be positive".into());
+    }
+    let config = SimConfig {
+        time_scale: args.time_scale,
+        baud: (args.baud > 0).then_some(args.baud),
+        axes,
+        rapid_mm_min: args.rapid_mm_min,
+        faults: Faults {
+            drop_at_line: args.drop_at_line,
+            alarm_at_line: args.alarm_at_line,
+            error_at_line: args.error_at_line,
+            ack_delay_s: args.ack_delay_ms / 1000.0,
+        },
+        ..SimConfig::default()
+    };
+    let sim = sim::start(config);
+    if let Some(addr) = &args.tcp {
+        let bound = sim
+            .listen_tcp(addr)
+            .await
+            .map_err(|e| format!("cannot listen on {addr}: {e}"))?;
+        println!("grbl_sim: GRBL 1.1h on tcp {bound}");
+    } else if args.pty {
+        let path = sim
+            .open_pty()
+            .map_err(|e| format!("cannot open a pty: {e}"))?;
+        println!("grbl_sim: GRBL 1.1h on pty {}", path.display());
+        if let Some(link) = &args.link {
+            if std::fs::symlink_metadata(link).is_ok_and(|m| m.file_type().is_symlink()) {
+                std::fs::remove_file(link).map_err(|e| format!("{}: {e}", link.display()))?;
+            }
+            std::os::unix::fs::symlink(&path, link)
+                .map_err(|e| format!("cannot link {}: {e}", link.display()))?;
+            println!("grbl_sim: linked {} -> {}", link.display(), path.display());
+        }
+    } else {
+        return Err("give --tcp ADDR or --pty".into());
+    }
+    tokio::signal::ctrl_c()
+        .await
+        .map_err(|e| format!("cannot wait for Ctrl-C: {e}"))?;
+    let executed = sim.executed_lines();
+    let overflow = sim.overflow_bytes();
+    let alarms = sim
+        .events()
+        .iter()
+        .filter(|e| matches!(e, SimEvent::Alarm { .. }))
+        .count();
+    println!(
+        "grbl_sim: {} lines executed, {} RX bytes lost to overflow, {} alarms",
+        executed.len(),
+        overflow,
+        alarms
+    );
+    if let Some(path) = &args.log {
+        let mut text = executed.join("\n");
+        text.push('\n');
+        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    if let (true, Some(link)) = (args.pty, &args.link) {
+        let _ = std::fs::remove_file(link);
+    }
+    Ok(())
+}

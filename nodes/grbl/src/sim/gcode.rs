@@ -506,8 +506,8 @@ pub(crate) fn execute(
                 return Err(NO_AXIS_WORDS);
             }
             let idx = if p == 0.0 { new.coord } else { p as usize - 1 };
-            for k in 0..n {
-                if let Some(x) = axis_words[k] {
+            for (k, w) in axis_words.iter().enumerate() {
+                if let Some(x) = *w {
                     let mm = x * unit;
                     new.offsets[idx][k] = if l == 2.0 {
                         mm
@@ -522,8 +522,8 @@ pub(crate) fn execute(
             if !has_axis {
                 return Err(NO_AXIS_WORDS);
             }
-            for k in 0..n {
-                if let Some(x) = axis_words[k] {
+            for (k, w) in axis_words.iter().enumerate() {
+                if let Some(x) = *w {
                     new.g92[k] = new.position[k] - new.offsets[new.coord][k] - x * unit;
                 }
             }

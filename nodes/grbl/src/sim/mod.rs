@@ -22,7 +22,8 @@
 //!   feed/rapid/spindle overrides.
 //! - **`$` commands**: `$`, `$$`, `$#`, `$G`, `$I`, `$N`, `$X`, `$H` (`error:5`: homing is
 //!   disabled), `$C`, `$J=` jogging, `$n=v` (only `$10`, the status mask, changes behaviour).
-//! - **G-code errors**: the `error:N` codes of [`gcode`] for bad or unsupported G-code, and
+//! - **G-code errors**: GRBL's `error:N` codes for a useful subset of bad or unsupported
+//!   G-code (1, 2, 4, 20-36, 38), and
 //!   `error:9` while in alarm or jog.
 //! - **Faults** ([`Faults`]): link drop at line N, alarm at line N, forced `error:N` at line N,
 //!   slow acknowledgements.
@@ -95,6 +96,12 @@ pub struct SimConfig {
     /// Print the banner when a host connects (as an Arduino does when the port opens), without
     /// resetting anything.
     pub banner_on_connect: bool,
+    /// Events and output due within this much tokio time are handled at once instead of
+    /// sleeping for them: tokio's timer has a 1 ms resolution, which would otherwise delay every
+    /// answer by up to 1 ms of real time (10 ms of simulated time at `time_scale` 10). The
+    /// simulation then runs ahead of the clock by at most this much. Use zero under a paused
+    /// clock for exact timing.
+    pub timer_slack: std::time::Duration,
     /// Injected faults.
     pub faults: Faults,
 }
@@ -112,6 +119,7 @@ impl Default for SimConfig {
             accel_mm_s2: 200.0,
             status_mask: 3,
             banner_on_connect: true,
+            timer_slack: std::time::Duration::from_millis(1),
             faults: Faults::default(),
         }
     }
@@ -235,6 +243,7 @@ pub struct SimHandle {
     record: Arc<Mutex<Record>>,
     snapshot: watch::Receiver<SimSnapshot>,
     clock: SimClock,
+    slack: std::time::Duration,
     next_conn: Arc<std::sync::atomic::AtomicU64>,
 }
 
@@ -305,6 +314,7 @@ pub fn start(config: SimConfig) -> SimHandle {
         received: 0,
     };
     let (snap_tx, snap_rx) = watch::channel(snap);
+    let slack = config.timer_slack;
     let machine = Machine::new(config, clock, record.clone(), snap_tx);
     tokio::spawn(machine.run(rx));
     SimHandle {
@@ -312,6 +322,7 @@ pub fn start(config: SimConfig) -> SimHandle {
         record,
         snapshot: snap_rx,
         clock,
+        slack,
         next_conn: Arc::new(std::sync::atomic::AtomicU64::new(1)),
     }
 }
@@ -354,7 +365,7 @@ impl SimHandle {
             out: out_tx.clone(),
             reader,
         });
-        tokio::spawn(writer(wr, out_rx, clock));
+        tokio::spawn(writer(wr, out_rx, clock, self.slack));
         connection
     }
 
@@ -468,6 +479,7 @@ async fn writer<W: AsyncWrite + Send + 'static>(
     wr: tokio::io::WriteHalf<W>,
     rx: mpsc::UnboundedReceiver<Out>,
     clock: SimClock,
+    slack: std::time::Duration,
 ) {
     let mut wr = wr;
     let mut rx = rx;
@@ -476,7 +488,7 @@ async fn writer<W: AsyncWrite + Send + 'static>(
             Out::Data { at_s, bytes } => {
                 // The machine computed the delivery time; wait for it unless it is (nearly) due.
                 let due = clock.instant_at(at_s);
-                if due > Instant::now() {
+                if due > Instant::now() + slack {
                     tokio::time::sleep_until(due).await;
                 }
                 if wr.write_all(&bytes).await.is_err() {
@@ -641,7 +653,9 @@ impl Machine {
             // that has (after rounding) already passed would spin without time advancing.
             for _ in 0..1000 {
                 match self.next_event() {
-                    Some(t) if self.clock.instant_at(t) <= Instant::now() => {
+                    Some(t)
+                        if self.clock.instant_at(t) <= Instant::now() + self.cfg.timer_slack =>
+                    {
                         self.advance(t.max(self.t))
                     }
                     _ => break,
@@ -1413,14 +1427,12 @@ impl Machine {
 
     fn feed_hold(&mut self) {
         match self.state {
-            MachineState::Run => {
-                if self.hold.is_none() && !self.hold_complete {
-                    let (v, _) = self.speed_at(self.t);
-                    self.hold = Some((self.t, v));
-                    self.state = MachineState::Hold(1);
-                    if v <= 0.0 {
-                        self.hold_stopped();
-                    }
+            MachineState::Run if self.hold.is_none() && !self.hold_complete => {
+                let (v, _) = self.speed_at(self.t);
+                self.hold = Some((self.t, v));
+                self.state = MachineState::Hold(1);
+                if v <= 0.0 {
+                    self.hold_stopped();
                 }
             }
             MachineState::Idle => {
@@ -1545,7 +1557,8 @@ impl Machine {
         }
         if self.cfg.status_mask & 2 != 0 {
             let planner_free = self.cfg.planner_blocks.saturating_sub(self.planner_used);
-            let rx_free = self.cfg.rx_buffer_bytes.saturating_sub(1) - self.rx.len();
+            // GRBL's serial_get_rx_buffer_available(): 128 when empty.
+            let rx_free = self.cfg.rx_buffer_bytes.saturating_sub(self.rx.len());
             s += &format!("|Bf:{planner_free},{rx_free}");
         }
         let (v, _) = self.speed_at(self.t);
