@@ -1,0 +1,533 @@
+//! Controller configuration (`config/controllers/*.yaml`) and credentials.
+//!
+//! ```yaml
+//! id: abb-irb2600-waam
+//! url: http://192.168.125.1      # or `port: 8080` for a controller on this host (loopback)
+//! rws: rw6                       # rw6 (RWS 1.0, IRC5) or rw7 (RWS 2.0, OmniCore)
+//! credentials:
+//!   env: CELL_RWS_IRB2600        # "user:password" in this environment variable
+//! # credentials: {file: /etc/cellsuite/irb2600.cred}   # or in this file (first line)
+//! task: T_ROB1                   # default
+//! program_dir: cellsuite         # under the controller's HOME; default
+//! timeouts: {connect_s: 5.0, request_s: 30.0}
+//! ```
+//!
+//! Credentials never sit in the YAML: a `password` (or `user`) key anywhere in the file is
+//! refused with an error that says where to put it instead. The secret is `user:password`
+//! (split at the first `:`, so the password may hold colons), read from the environment
+//! variable or from the first line of the file when the client is made, not when the YAML
+//! is parsed.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serde::Deserialize;
+
+/// Which Robot Web Services generation the controller speaks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RwsVersion {
+    /// RWS 1.0: RobotWare 6 on IRC5. HTTP, Digest login, query actions (`?action=start`),
+    /// XHTML or `?json=1` bodies, files under `$HOME`.
+    Rw6,
+    /// RWS 2.0: RobotWare 7 on OmniCore. HTTPS, Basic login, path actions
+    /// (`/execution/start`), `application/hal+json;v=2.0` bodies, files under `HOME`.
+    Rw7,
+}
+
+impl fmt::Display for RwsVersion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            RwsVersion::Rw6 => "rw6",
+            RwsVersion::Rw7 => "rw7",
+        })
+    }
+}
+
+/// Where the `user:password` secret comes from (module docs). In YAML a map with exactly one
+/// of the keys `env` and `file`.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(try_from = "CredentialsYaml")]
+pub enum CredentialsSource {
+    /// The named environment variable holds `user:password`.
+    Env(String),
+    /// The first line of this file holds `user:password`; a relative path is taken from the
+    /// directory of the configuration file.
+    File(PathBuf),
+}
+
+/// The YAML form of [`CredentialsSource`] (serde_norway reads enums only from YAML tags).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CredentialsYaml {
+    env: Option<String>,
+    file: Option<PathBuf>,
+}
+
+impl TryFrom<CredentialsYaml> for CredentialsSource {
+    type Error = String;
+    fn try_from(y: CredentialsYaml) -> Result<Self, String> {
+        match (y.env, y.file) {
+            (Some(var), None) if !var.trim().is_empty() => Ok(CredentialsSource::Env(var)),
+            (None, Some(path)) if !path.as_os_str().is_empty() => Ok(CredentialsSource::File(path)),
+            (Some(_), Some(_)) => Err("give either `env` or `file`, not both".into()),
+            _ => Err("give `env: VARIABLE` or `file: PATH` (non-empty)".into()),
+        }
+    }
+}
+
+impl fmt::Display for CredentialsSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CredentialsSource::Env(var) => write!(f, "${var}"),
+            CredentialsSource::File(path) => write!(f, "{}", path.display()),
+        }
+    }
+}
+
+/// A user name and password for the controller. `Debug` does not show the password.
+#[derive(Clone, PartialEq, Eq)]
+pub struct Credentials {
+    /// Controller user name (RobotWare's UAS user, e.g. the factory "Default User").
+    pub user: String,
+    /// Its password.
+    pub password: String,
+}
+
+impl fmt::Debug for Credentials {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Credentials")
+            .field("user", &self.user)
+            .field("password", &"<redacted>")
+            .finish()
+    }
+}
+
+impl CredentialsSource {
+    /// Reads the secret now.
+    ///
+    /// # Errors
+    /// The variable is unset or not Unicode, the file is unreadable, or the secret is not
+    /// `user:password` with a non-empty user.
+    pub fn load(&self) -> Result<Credentials, ConfigError> {
+        let (text, from) = match self {
+            CredentialsSource::Env(var) => match std::env::var(var) {
+                Ok(v) => (v, format!("${var}")),
+                Err(std::env::VarError::NotPresent) => {
+                    return Err(ConfigError::Credentials {
+                        from: format!("${var}"),
+                        message: format!("not set (export {var}='user:password')"),
+                    })
+                }
+                Err(std::env::VarError::NotUnicode(_)) => {
+                    return Err(ConfigError::Credentials {
+                        from: format!("${var}"),
+                        message: "not valid Unicode".into(),
+                    })
+                }
+            },
+            CredentialsSource::File(path) => match std::fs::read_to_string(path) {
+                Ok(t) => (
+                    t.lines().next().unwrap_or_default().to_owned(),
+                    path.display().to_string(),
+                ),
+                Err(e) => {
+                    return Err(ConfigError::Credentials {
+                        from: path.display().to_string(),
+                        message: format!("cannot read: {e}"),
+                    })
+                }
+            },
+        };
+        let text = text.trim_end_matches(['\r', '\n']);
+        match text.split_once(':') {
+            Some((user, password)) if !user.trim().is_empty() => Ok(Credentials {
+                user: user.to_owned(),
+                password: password.to_owned(),
+            }),
+            _ => Err(ConfigError::Credentials {
+                from,
+                message: "expected `user:password` (user non-empty)".into(),
+            }),
+        }
+    }
+}
+
+/// Request timeouts, seconds.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Timeouts {
+    /// TCP (and TLS) connect timeout, s.
+    pub connect_s: f64,
+    /// Whole-request timeout (send and read the answer), s.
+    pub request_s: f64,
+}
+
+impl Default for Timeouts {
+    fn default() -> Self {
+        Timeouts {
+            connect_s: 5.0,
+            request_s: 30.0,
+        }
+    }
+}
+
+impl Timeouts {
+    /// The connect timeout as a `Duration`.
+    pub fn connect(&self) -> Duration {
+        Duration::from_secs_f64(self.connect_s)
+    }
+    /// The request timeout as a `Duration`.
+    pub fn request(&self) -> Duration {
+        Duration::from_secs_f64(self.request_s)
+    }
+}
+
+fn default_task() -> String {
+    "T_ROB1".into()
+}
+
+fn default_program_dir() -> String {
+    "cellsuite".into()
+}
+
+/// One controller, as read from `config/controllers/NAME.yaml` (module docs).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerConfig {
+    /// Controller id, used in every error message and log line.
+    pub id: String,
+    /// Base URL, e.g. `http://192.168.125.1` or `https://omnicore:443`. Exactly one of `url`
+    /// and `port` is given.
+    #[serde(default)]
+    pub url: Option<String>,
+    /// Port on this host (loopback, plain HTTP): a virtual controller or the simulator.
+    #[serde(default)]
+    pub port: Option<u16>,
+    /// RWS generation.
+    pub rws: RwsVersion,
+    /// Where the login secret comes from; never the secret itself.
+    pub credentials: CredentialsSource,
+    /// Request timeouts.
+    #[serde(default)]
+    pub timeouts: Timeouts,
+    /// RAPID task the program is loaded into.
+    #[serde(default = "default_task")]
+    pub task: String,
+    /// Directory under the controller's HOME that programs are uploaded to (created if
+    /// missing); empty means HOME itself.
+    #[serde(default = "default_program_dir")]
+    pub program_dir: String,
+    /// HTTPS only (feature `tls`): accept the controller's self-signed certificate. OmniCore
+    /// controllers ship one; prefer installing a proper certificate.
+    #[serde(default)]
+    pub accept_invalid_certs: bool,
+}
+
+/// Errors reading a controller configuration or its credentials.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{file}: {message}")]
+    Io {
+        /// The configuration file.
+        file: String,
+        /// The I/O error.
+        message: String,
+    },
+    /// The YAML does not parse or does not fit the schema.
+    #[error("{file}{}: {}{message}", line.map(|l| format!(":{l}")).unwrap_or_default(), field.as_ref().map(|f| format!("field `{f}`: ")).unwrap_or_default())]
+    Parse {
+        /// The configuration file.
+        file: String,
+        /// Line, when known.
+        line: Option<usize>,
+        /// Dotted path of the offending field, when known.
+        field: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A password (or user name) is written in the YAML.
+    #[error("{file}: field `{field}`: credentials must not be written in the configuration; put `user:password` in an environment variable (credentials: {{env: VAR}}) or a file outside the repository (credentials: {{file: PATH}})")]
+    InlineSecret {
+        /// The configuration file.
+        file: String,
+        /// The offending key.
+        field: String,
+    },
+    /// A value is out of range or inconsistent with another.
+    #[error("{file}: field `{field}`: {message}")]
+    Invalid {
+        /// The configuration file.
+        file: String,
+        /// The offending field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The credentials could not be read.
+    #[error("credentials from {from}: {message}")]
+    Credentials {
+        /// `$VAR` or the file path.
+        from: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// serde_norway's message without its own path prefix and `at line L column C` suffix (the
+/// error carries both separately).
+fn clean_message(mut m: String) -> String {
+    if let Some(i) = m.rfind(" at line ") {
+        if m[i..].contains(" column ") {
+            m.truncate(i);
+        }
+    }
+    if let Some((head, rest)) = m.split_once(": ") {
+        if !head.is_empty() && !head.contains(' ') {
+            return rest.to_owned();
+        }
+    }
+    m
+}
+
+/// Keys that hold secrets and so may not appear in the YAML.
+const SECRET_KEYS: [&str; 5] = ["password", "passwd", "pass", "user", "username"];
+
+fn find_secret(value: &serde_norway::Value, prefix: &str) -> Option<String> {
+    let serde_norway::Value::Mapping(map) = value else {
+        return None;
+    };
+    for (k, v) in map {
+        let Some(key) = k.as_str() else { continue };
+        let path = if prefix.is_empty() {
+            key.to_owned()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        if SECRET_KEYS.contains(&key.to_ascii_lowercase().as_str()) {
+            return Some(path);
+        }
+        if let Some(found) = find_secret(v, &path) {
+            return Some(found);
+        }
+    }
+    None
+}
+
+impl ControllerConfig {
+    /// Reads and checks a configuration file; a relative credentials file is resolved against
+    /// the file's directory.
+    ///
+    /// # Errors
+    /// See [`ControllerConfig::from_yaml_str`]; also [`ConfigError::Io`].
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        let path = path.as_ref();
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError::Io {
+            file: name.clone(),
+            message: e.to_string(),
+        })?;
+        let mut cfg = Self::from_yaml_str(&text, &name)?;
+        if let CredentialsSource::File(p) = &mut cfg.credentials {
+            if p.is_relative() {
+                if let Some(dir) = path.parent() {
+                    *p = dir.join(&*p);
+                }
+            }
+        }
+        Ok(cfg)
+    }
+
+    /// Parses and checks YAML text; `source_name` names it in errors.
+    ///
+    /// # Errors
+    /// Bad YAML, an unknown or mistyped key (named with its dotted path), a secret in the
+    /// YAML, both or neither of `url` and `port`, a URL that is not `http://` or `https://`,
+    /// an `https://` URL without the `tls` feature, a timeout that is not positive.
+    pub fn from_yaml_str(text: &str, source_name: &str) -> Result<Self, ConfigError> {
+        let parse_err = |e: serde_norway::Error, field: Option<String>| ConfigError::Parse {
+            file: source_name.into(),
+            line: e.location().map(|l| l.line()),
+            field,
+            message: clean_message(e.to_string()),
+        };
+        let value: serde_norway::Value =
+            serde_norway::from_str(text).map_err(|e| parse_err(e, None))?;
+        if let Some(field) = find_secret(&value, "") {
+            return Err(ConfigError::InlineSecret {
+                file: source_name.into(),
+                field,
+            });
+        }
+        let de = serde_norway::Deserializer::from_str(text);
+        let cfg: ControllerConfig = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let field = (path != ".").then_some(path);
+            parse_err(e.into_inner(), field)
+        })?;
+        cfg.check(source_name)?;
+        Ok(cfg)
+    }
+
+    fn check(&self, file: &str) -> Result<(), ConfigError> {
+        let invalid = |field: &str, message: String| ConfigError::Invalid {
+            file: file.into(),
+            field: field.into(),
+            message,
+        };
+        if self.id.trim().is_empty() {
+            return Err(invalid("id", "empty".into()));
+        }
+        match (&self.url, self.port) {
+            (Some(_), Some(_)) => {
+                return Err(invalid(
+                    "url",
+                    "give either `url` or `port`, not both".into(),
+                ))
+            }
+            (None, None) => return Err(invalid("url", "missing (or give `port`)".into())),
+            (Some(url), None) => {
+                let https = url.starts_with("https://");
+                if !https && !url.starts_with("http://") {
+                    return Err(invalid(
+                        "url",
+                        format!("{url:?}: expected http://HOST[:PORT] or https://HOST[:PORT]"),
+                    ));
+                }
+                if https && !cfg!(feature = "tls") {
+                    return Err(invalid(
+                        "url",
+                        format!("{url:?}: HTTPS needs cell_rws built with the `tls` feature"),
+                    ));
+                }
+            }
+            (None, Some(0)) => return Err(invalid("port", "0 is not a port".into())),
+            (None, Some(_)) => {}
+        }
+        for (field, v) in [
+            ("timeouts.connect_s", self.timeouts.connect_s),
+            ("timeouts.request_s", self.timeouts.request_s),
+        ] {
+            if !(v.is_finite() && v > 0.0 && v < 1e6) {
+                return Err(invalid(field, format!("{v}: expected seconds > 0")));
+            }
+        }
+        if self.task.trim().is_empty() {
+            return Err(invalid("task", "empty".into()));
+        }
+        if self
+            .program_dir
+            .split('/')
+            .any(|s| s == ".." || s == "." || s.contains('\\'))
+            || self.program_dir.starts_with('/')
+        {
+            return Err(invalid(
+                "program_dir",
+                format!("{:?}: a relative path under HOME", self.program_dir),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The base URL (no trailing slash).
+    pub fn base_url(&self) -> String {
+        match (&self.url, self.port) {
+            (Some(url), _) => url.trim_end_matches('/').to_owned(),
+            (None, Some(port)) => format!("http://127.0.0.1:{port}"),
+            (None, None) => String::new(),
+        }
+    }
+
+    /// A configuration for a controller on this host, e.g. a simulator: credentials from the
+    /// given source, other fields at their defaults.
+    pub fn loopback(id: &str, port: u16, rws: RwsVersion, credentials: CredentialsSource) -> Self {
+        ControllerConfig {
+            id: id.into(),
+            url: None,
+            port: Some(port),
+            rws,
+            credentials,
+            timeouts: Timeouts::default(),
+            task: default_task(),
+            program_dir: default_program_dir(),
+            accept_invalid_certs: false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_a_full_file() {
+        let cfg = ControllerConfig::from_yaml_str(
+            "id: r1\nurl: http://10.0.0.1/\nrws: rw6\ncredentials:\n  env: R1_CRED\ntimeouts: {request_s: 10}\n",
+            "r1.yaml",
+        )
+        .unwrap();
+        assert_eq!(cfg.base_url(), "http://10.0.0.1");
+        assert_eq!(cfg.credentials, CredentialsSource::Env("R1_CRED".into()));
+        assert_eq!(cfg.task, "T_ROB1");
+        assert_eq!(cfg.timeouts.connect_s, 5.0);
+        assert_eq!(cfg.timeouts.request_s, 10.0);
+    }
+
+    #[test]
+    fn errors_name_file_and_field() {
+        let e = ControllerConfig::from_yaml_str(
+            "id: r1\nport: 80\nrws: rw6\ncredentials: {env: X}\ntimeouts: {request: 10}\n",
+            "r1.yaml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("r1.yaml:5: field `timeouts.request`: unknown field `request`"),
+            "{e}"
+        );
+
+        let e = ControllerConfig::from_yaml_str(
+            "id: r1\nport: 80\nrws: rw8\ncredentials: {env: X}\n",
+            "r1.yaml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("field `rws`"), "{e}");
+
+        let e = ControllerConfig::from_yaml_str(
+            "id: r1\nport: 80\nurl: http://x\nrws: rw6\ncredentials: {env: X}\n",
+            "r1.yaml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            e,
+            "r1.yaml: field `url`: give either `url` or `port`, not both"
+        );
+    }
+
+    #[test]
+    fn inline_password_is_refused() {
+        for yaml in [
+            "id: r1\nport: 80\nrws: rw6\ncredentials: {env: X}\npassword: robotics\n",
+            "id: r1\nport: 80\nrws: rw6\ncredentials:\n  user: Default User\n  password: robotics\n",
+        ] {
+            let e = ControllerConfig::from_yaml_str(yaml, "r1.yaml").unwrap_err();
+            assert!(matches!(e, ConfigError::InlineSecret { .. }), "{e}");
+            let text = e.to_string();
+            assert!(text.contains("must not be written in the configuration"), "{text}");
+            assert!(!text.contains("robotics"), "{text}");
+        }
+    }
+
+    #[test]
+    fn credentials_debug_hides_the_password() {
+        let c = Credentials {
+            user: "u".into(),
+            password: "secret".into(),
+        };
+        assert!(!format!("{c:?}").contains("secret"));
+    }
+}
