@@ -187,8 +187,8 @@ pub fn emit(
     };
     let header = format!(
         "! cellsuite emitter: job {}, profile {}",
-        comment_text(job_id),
-        comment_text(&profile.name)
+        crate::gcode::sanitise(job_id),
+        crate::gcode::sanitise(&profile.name)
     );
     let mut files = Vec::new();
     if parts.len() == 1 {
@@ -710,21 +710,6 @@ fn base_name(r: &RapidSettings, job_id: &str) -> Result<String, EmitError> {
     })?;
     debug_assert!(base.len() + "_99999_run".len() <= MAX_IDENTIFIER_LEN);
     Ok(base)
-}
-
-/// Text for a `!` comment: letters, digits, space and `_ - . : /` only (others become `_`),
-/// at most 64 characters, so nothing can end the line.
-fn comment_text(text: &str) -> String {
-    text.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || " _-.:/".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .take(64)
-        .collect()
 }
 
 /// The inside of a RAPID string literal holding `text`: at most 80 characters of value
