@@ -71,8 +71,13 @@ pub struct PlanHotwireFeedback {
 pub struct ExecuteProgramGoal {
     /// The program to run.
     pub program: MachineProgram,
-    /// Target machine (machine profile name); empty = the bridge's default machine.
+    /// Target controller (an id under `config/controllers`); empty = the controller configured
+    /// for the program's `machine_profile`, else the bridge's default controller.
     pub machine_id: String,
+    /// Original line number (of the program's first file, 1-based) to start from; 0 = the
+    /// first line. Resuming after a stop: the operator-confirmed line, usually the result's
+    /// `last_acked_line + 1`.
+    pub start_line: u32,
 }
 
 /// Result of `ExecuteProgram`.
@@ -84,10 +89,34 @@ pub struct ExecuteProgramResult {
     pub message: String,
     /// Final controller state (one of `MachineStatus::STATE_*`).
     pub final_state: u8,
+    /// One of `OUTCOME_*`.
+    pub outcome: u8,
+    /// The line the outcome concerns: the rejected line, or the last acknowledged line; 0 =
+    /// none.
+    pub line: u32,
+    /// Last line the controller acknowledged (original numbering); 0 = none.
+    pub last_acked_line: u32,
+    /// Link drops survived by reconnecting and resuming during this goal.
+    pub reconnects: u32,
+}
+
+impl ExecuteProgramResult {
+    /// Every line ran.
+    pub const OUTCOME_FINISHED: u8 = 0;
+    /// Stopped by a cancel, an abort command or shutdown.
+    pub const OUTCOME_ABORTED: u8 = 1;
+    /// The controller raised an alarm.
+    pub const OUTCOME_ALARM: u8 = 2;
+    /// The controller rejected a line (`error:N`); `line` names it.
+    pub const OUTCOME_REJECTED_LINE: u8 = 3;
+    /// The link was lost and not resumed.
+    pub const OUTCOME_LINK_LOST: u8 = 4;
+    /// Refused before anything was sent (wrong dialect or machine, unknown controller, busy).
+    pub const OUTCOME_REFUSED: u8 = 5;
 }
 
 /// Feedback of `ExecuteProgram`.
-#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
 pub struct ExecuteProgramFeedback {
     /// Last program line the controller acknowledged.
     pub acked_line: u32,
@@ -95,4 +124,6 @@ pub struct ExecuteProgramFeedback {
     pub total_lines: u32,
     /// Controller state (one of `MachineStatus::STATE_*`).
     pub state: u8,
+    /// Acknowledged share of the program, 0..100.
+    pub percent_done: f32,
 }

@@ -29,10 +29,12 @@ pub use action::{
 };
 pub use cdr::{from_cdr, to_cdr, CdrError};
 pub use msg::{
-    HeatMap, HeatMapSizeError, MachineProgram, MachineStatus, ProgramFile, Toolpath,
-    ToolpathSegment,
+    HeatMap, HeatMapSizeError, MachineCommand, MachineProgram, MachineStatus, ProgramFile,
+    Toolpath, ToolpathSegment,
 };
-pub use srv::{EmitProgramRequest, EmitProgramResponse};
+pub use srv::{
+    EmitProgramRequest, EmitProgramResponse, SendMachineCommandRequest, SendMachineCommandResponse,
+};
 
 /// A Rust type that mirrors a registered ROS 2 message definition.
 pub trait RosMessage:
@@ -125,8 +127,11 @@ macro_rules! for_each_message {
             $crate::ProgramFile => "cell_msgs/msg/ProgramFile",
             $crate::MachineProgram => "cell_msgs/msg/MachineProgram",
             $crate::MachineStatus => "cell_msgs/msg/MachineStatus",
+            $crate::MachineCommand => "cell_msgs/msg/MachineCommand",
             $crate::EmitProgramRequest => "cell_msgs/srv/EmitProgram_Request",
             $crate::EmitProgramResponse => "cell_msgs/srv/EmitProgram_Response",
+            $crate::SendMachineCommandRequest => "cell_msgs/srv/SendMachineCommand_Request",
+            $crate::SendMachineCommandResponse => "cell_msgs/srv/SendMachineCommand_Response",
             $crate::PlanHotwireGoal => "cell_msgs/action/PlanHotwire_Goal",
             $crate::PlanHotwireResult => "cell_msgs/action/PlanHotwire_Result",
             $crate::PlanHotwireFeedback => "cell_msgs/action/PlanHotwire_Feedback",

@@ -297,6 +297,30 @@ pub struct MachineStatus {
     pub alarm: String,
 }
 
+/// An operator command for one controller, acted on at once (within one status cycle).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct MachineCommand {
+    /// Controller id; empty = every controller of the bridge.
+    pub machine_id: String,
+    /// One of `COMMAND_*`.
+    pub command: u8,
+    /// Percent for the overrides (10..200); unused otherwise.
+    pub value: u16,
+}
+
+impl MachineCommand {
+    /// Feed hold.
+    pub const COMMAND_HOLD: u8 = 1;
+    /// Resume after a hold.
+    pub const COMMAND_RESUME: u8 = 2;
+    /// Safe stop: hold, reset, heat off; a running program ends as aborted.
+    pub const COMMAND_ABORT: u8 = 3;
+    /// Feed override to `value` percent.
+    pub const COMMAND_FEED_OVERRIDE: u8 = 4;
+    /// Spindle (heat) override to `value` percent.
+    pub const COMMAND_SPINDLE_OVERRIDE: u8 = 5;
+}
+
 impl MachineStatus {
     /// State not known yet.
     pub const STATE_UNKNOWN: u8 = 0;

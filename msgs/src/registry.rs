@@ -104,9 +104,19 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../msg/MachineStatus.msg"),
     ),
     (
+        "cell_msgs/msg/MachineCommand",
+        Kind::Msg,
+        include_str!("../msg/MachineCommand.msg"),
+    ),
+    (
         "cell_msgs/srv/EmitProgram",
         Kind::Srv,
         include_str!("../srv/EmitProgram.srv"),
+    ),
+    (
+        "cell_msgs/srv/SendMachineCommand",
+        Kind::Srv,
+        include_str!("../srv/SendMachineCommand.srv"),
     ),
     (
         "cell_msgs/action/PlanHotwire",
@@ -213,7 +223,7 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        assert_eq!(names.len(), 13 + 2 + 2 * 3);
+        assert_eq!(names.len(), 14 + 2 * 2 + 2 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{MachineProgram, Toolpath};
+use crate::{MachineCommand, MachineProgram, Toolpath};
 
 /// Request of `EmitProgram`: turn a toolpath into a machine program for one machine profile.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
@@ -31,4 +31,20 @@ pub struct EmitProgramResponse {
     pub message: String,
     /// The program; empty unless `success`.
     pub program: MachineProgram,
+}
+
+/// Request of `SendMachineCommand`: act on a controller now.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct SendMachineCommandRequest {
+    /// The command.
+    pub command: MachineCommand,
+}
+
+/// Response of `SendMachineCommand`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Eq, Default)]
+pub struct SendMachineCommandResponse {
+    /// Whether every addressed controller took the command.
+    pub success: bool,
+    /// What was done, or why not, per controller.
+    pub message: String,
 }

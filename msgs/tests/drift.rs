@@ -168,7 +168,10 @@ fn every_registered_message_has_a_rust_type() {
 
 #[test]
 fn constants_match_their_definitions() {
-    use cell_msgs::{MachineStatus as S, Toolpath as T, ToolpathSegment as G};
+    use cell_msgs::{
+        ExecuteProgramResult as R, MachineCommand as C, MachineStatus as S, Toolpath as T,
+        ToolpathSegment as G,
+    };
     let rust: Vec<(&str, Vec<(&str, u8)>)> = vec![
         (
             T::ROS_NAME,
@@ -203,6 +206,27 @@ fn constants_match_their_definitions() {
                 ("STATE_HOLD", S::STATE_HOLD),
                 ("STATE_ALARM", S::STATE_ALARM),
                 ("STATE_DONE", S::STATE_DONE),
+            ],
+        ),
+        (
+            C::ROS_NAME,
+            vec![
+                ("COMMAND_HOLD", C::COMMAND_HOLD),
+                ("COMMAND_RESUME", C::COMMAND_RESUME),
+                ("COMMAND_ABORT", C::COMMAND_ABORT),
+                ("COMMAND_FEED_OVERRIDE", C::COMMAND_FEED_OVERRIDE),
+                ("COMMAND_SPINDLE_OVERRIDE", C::COMMAND_SPINDLE_OVERRIDE),
+            ],
+        ),
+        (
+            R::ROS_NAME,
+            vec![
+                ("OUTCOME_FINISHED", R::OUTCOME_FINISHED),
+                ("OUTCOME_ABORTED", R::OUTCOME_ABORTED),
+                ("OUTCOME_ALARM", R::OUTCOME_ALARM),
+                ("OUTCOME_REJECTED_LINE", R::OUTCOME_REJECTED_LINE),
+                ("OUTCOME_LINK_LOST", R::OUTCOME_LINK_LOST),
+                ("OUTCOME_REFUSED", R::OUTCOME_REFUSED),
             ],
         ),
     ];
