@@ -26,6 +26,12 @@
 //!    which case `$X` is sent first): `M5`, so the heat is off in the modal state as well, and
 //!    its `ok` confirms it.
 //!
+//! A silent controller is a link loss too: a missing `ok` alone is not (GRBL withholds `ok`
+//! while its planner is full during a long slow move), but GRBL answers `?` at once in every
+//! state, so when `?` polls have gone out and nothing at all has come back for
+//! [`ClientConfig::status_timeout`], the link task drops the link as if it had closed
+//! ([`Fault::LinkLost`], same line accounting, same resume path).
+//!
 //! The returned [`StreamError`] names the fault, the original line number of the line GRBL
 //! rejected, the last acknowledged line and the lines that were sent but never acknowledged.
 //!
@@ -84,6 +90,11 @@ pub struct ClientConfig {
     pub rx_buffer_bytes: usize,
     /// Status poll period (`?`); GRBL recommends at most 5 Hz.
     pub status_period: Duration,
+    /// Status watchdog: when `?` has been sent and no line at all (status report, `ok`, push
+    /// message) has arrived for this long, the link is dropped and a running stream ends with
+    /// [`Fault::LinkLost`]. Until the controller's first line on a connection the longer of
+    /// this and `connect_timeout` applies (a serial board may still be booting).
+    pub status_timeout: Duration,
     /// How long to wait for the first status report after connecting.
     pub connect_timeout: Duration,
     /// What a stream call does after a fault.
@@ -108,6 +119,8 @@ impl Default for ClientConfig {
             flow: FlowControl::CharacterCounting,
             rx_buffer_bytes: RX_BUFFER_SIZE,
             status_period: Duration::from_millis(200),
+            // Ten status periods.
+            status_timeout: Duration::from_secs(2),
             connect_timeout: Duration::from_secs(10),
             on_fault: FaultAction::SafeStop,
             hold_timeout: Duration::from_secs(30),
@@ -505,6 +518,8 @@ impl GrblClient {
             out: Vec::new(),
             hold_pending: false,
             next_job: 1,
+            polled_at: None,
+            heard: false,
         };
         task.attach(link);
         tokio::spawn(task.run());
@@ -867,6 +882,10 @@ struct LinkTask {
     out: Vec<u8>,
     hold_pending: bool,
     next_job: u64,
+    /// When the oldest `?` still without any line after it was written.
+    polled_at: Option<Instant>,
+    /// A line has arrived on this connection.
+    heard: bool,
 }
 
 impl LinkTask {
@@ -911,6 +930,8 @@ impl LinkTask {
             }
         }));
         self.budget.clear();
+        self.polled_at = None;
+        self.heard = false;
         self.progress.send_modify(|p| {
             p.connected = true;
             p.connections += 1;
@@ -924,6 +945,7 @@ impl LinkTask {
         poll.set_missed_tick_behavior(MissedTickBehavior::Delay);
         loop {
             self.pump().await;
+            let watchdog = self.watchdog();
             tokio::select! {
                 biased;
                 cmd = self.cmd_rx.recv() => match cmd {
@@ -938,6 +960,20 @@ impl LinkTask {
                 _ = poll.tick() => {
                     if self.writer.is_some() {
                         self.write_now(&[Realtime::StatusQuery.byte()]).await;
+                        self.polled();
+                    }
+                }
+                _ = async {
+                    match watchdog {
+                        Some((at, _)) => tokio::time::sleep_until(at).await,
+                        None => std::future::pending().await,
+                    }
+                } => {
+                    if let Some((_, waited)) = watchdog {
+                        self.link_lost(format!(
+                            "no answer from the controller for {:.1} s",
+                            waited.as_secs_f64()
+                        ));
                     }
                 }
             }
@@ -945,6 +981,23 @@ impl LinkTask {
         if let Some(r) = self.reader.take() {
             r.abort();
         }
+    }
+
+    /// Notes that `?` went out: the watchdog runs from the first poll nothing has answered.
+    fn polled(&mut self) {
+        if self.writer.is_some() && self.polled_at.is_none() {
+            self.polled_at = Some(Instant::now());
+        }
+    }
+
+    /// When the watchdog fires, and the silence it will have waited for.
+    fn watchdog(&self) -> Option<(Instant, Duration)> {
+        let since = self.polled_at.filter(|_| self.writer.is_some())?;
+        let mut wait = self.config.status_timeout;
+        if !self.heard {
+            wait = wait.max(self.config.connect_timeout);
+        }
+        Some((since + wait, wait))
     }
 
     /// Writes bytes now; a write failure is a link loss.
@@ -972,6 +1025,9 @@ impl LinkTask {
                     }
                 }
                 self.write_now(&bytes).await;
+                if rts.contains(&Realtime::StatusQuery) {
+                    self.polled();
+                }
             }
             Cmd::Line { text, reply } => {
                 if self.writer.is_none() {
@@ -1180,6 +1236,7 @@ impl LinkTask {
             return;
         }
         self.writer = None;
+        self.polled_at = None;
         if let Some(r) = self.reader.take() {
             r.abort();
         }
@@ -1213,6 +1270,9 @@ impl LinkTask {
             }
             Incoming::Line(l) => l,
         };
+        // Any line at all shows the controller is alive.
+        self.polled_at = None;
+        self.heard = true;
         if line.trim().is_empty() {
             return;
         }

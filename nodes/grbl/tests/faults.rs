@@ -171,8 +171,9 @@ async fn feed_hold_is_acted_on_within_one_status_cycle() {
         let (client, p) = (client.clone(), p.clone());
         tokio::spawn(async move { client.stream(&p).await })
     };
-    sim.wait_for(|s| s.state == MachineState::Run && s.executed > 50)
-        .await;
+    sim.wait_for(WAIT, |s| s.state == MachineState::Run && s.executed > 50)
+        .await
+        .expect("the machine runs the program");
     let queries = |sim: &sim::SimHandle| {
         sim.events()
             .iter()
@@ -190,7 +191,10 @@ async fn feed_hold_is_acted_on_within_one_status_cycle() {
     let asked_at = sim.now_s();
     let queries_before = queries(&sim);
     client.hold().await.unwrap();
-    let held = sim.wait_for(|s| s.state == MachineState::Hold(0)).await;
+    let held = sim
+        .wait_for(WAIT, |s| s.state == MachineState::Hold(0))
+        .await
+        .expect("the hold comes to a stop");
     let events = sim.events();
     let hold_at = events
         .iter()
@@ -267,7 +271,7 @@ async fn link_drop_then_resume_sends_no_line_twice_and_skips_none() {
     for flow in [FlowControl::CharacterCounting, FlowControl::SendResponse] {
         let cfg = SimConfig {
             faults: Faults {
-                drop_at_line: Some(120),
+                drop_at_lines: vec![120],
                 ..Faults::default()
             },
             ..SimConfig::default()
@@ -287,8 +291,11 @@ async fn link_drop_then_resume_sends_no_line_twice_and_skips_none() {
         // The link is back; the controller kept running what its planner held.
         let progress = client.reconnect().await.expect("reconnects");
         assert_eq!(progress.last_acked_line, Some(last));
-        sim.wait_for(|s| s.state == MachineState::Idle && s.planner_used == 0)
-            .await;
+        sim.wait_for(WAIT, |s| {
+            s.state == MachineState::Idle && s.planner_used == 0
+        })
+        .await
+        .expect("the planner drains");
         // Operator confirmation: the machine's log ends with the last acknowledged line.
         let executed = sim.executed();
         let last_text = &p.lines()[p.index_of_line(last).unwrap()].text;
@@ -379,8 +386,9 @@ async fn reset_in_motion_raises_alarm_3_and_the_banner() {
         let (client, p) = (client.clone(), p.clone());
         tokio::spawn(async move { client.stream(&p).await })
     };
-    sim.wait_for(|s| s.state == MachineState::Run && s.executed > 20)
-        .await;
+    sim.wait_for(WAIT, |s| s.state == MachineState::Run && s.executed > 20)
+        .await
+        .expect("the machine runs the program");
     client.soft_reset().await.unwrap();
     let err = streamer.await.unwrap().unwrap_err();
     assert!(matches!(err.fault, Fault::Alarm { code: 3, .. }), "{err}");
@@ -404,10 +412,16 @@ async fn jog_cancel_overrides_and_commands() {
         vec!["[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]".to_string()]
     );
     client.command("$J=G91 X50 F600").await.unwrap();
-    sim.wait_for(|s| s.state == MachineState::Jog && s.position[0] > 1.0)
-        .await;
+    sim.wait_for(WAIT, |s| {
+        s.state == MachineState::Jog && s.position[0] > 1.0
+    })
+    .await
+    .expect("the jog moves");
     client.jog_cancel().await.unwrap();
-    let s = sim.wait_for(|s| s.state == MachineState::Idle).await;
+    let s = sim
+        .wait_for(WAIT, |s| s.state == MachineState::Idle)
+        .await
+        .expect("the jog cancel stops the machine");
     assert!(
         s.position[0] > 1.0 && s.position[0] < 50.0,
         "{:?}",
@@ -440,8 +454,11 @@ async fn abort_mid_program_holds_resets_and_switches_heat_off() {
         let (client, p) = (client.clone(), p.clone());
         tokio::spawn(async move { client.stream(&p).await })
     };
-    sim.wait_for(|s| s.state == MachineState::Run && s.executed > 30 && s.spindle_on)
-        .await;
+    sim.wait_for(WAIT, |s| {
+        s.state == MachineState::Run && s.executed > 30 && s.spindle_on
+    })
+    .await
+    .expect("the machine runs the program with the heat on");
     client.abort().await.unwrap();
     let err = streamer.await.unwrap().unwrap_err();
     assert_eq!(err.fault, Fault::Aborted);
@@ -452,4 +469,241 @@ async fn abort_mid_program_holds_resets_and_switches_heat_off() {
     assert_eq!(sim.snapshot().state, MachineState::Idle);
     let executed = sim.executed_lines();
     assert_prefix(&executed[..executed.len() - 1], &texts(&p), None);
+}
+
+/// A fixed-seed linear congruential generator (Knuth's MMIX constants): the same lines on every
+/// run, with no dependency.
+struct Lcg(u64);
+
+impl Lcg {
+    fn below(&mut self, n: u64) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        // The high bits of an LCG are the well-mixed ones.
+        (self.0 >> 33) % n
+    }
+}
+
+/// `count` distinct G-code line counts in `lo..=hi`, sorted.
+fn distinct_lines(seed: u64, count: usize, lo: u64, hi: u64) -> Vec<u64> {
+    let mut rng = Lcg(seed);
+    let mut out = std::collections::BTreeSet::new();
+    while out.len() < count {
+        out.insert(lo + rng.below(hi - lo + 1));
+    }
+    out.into_iter().collect()
+}
+
+/// After a link loss: reconnect, let the controller finish what its planner held, check that the
+/// machine stopped exactly after the last acknowledged line, and return the line to resume at.
+async fn reconnect_and_confirm(
+    sim: &sim::SimHandle,
+    client: &GrblClient,
+    p: &Program,
+    err: &cell_grbl::stream::StreamError,
+) -> usize {
+    assert!(matches!(err.fault, Fault::LinkLost(_)), "{err}");
+    assert!(err.safe_stop.is_none(), "no safe stop over a dead link");
+    let last = err.last_acked_line.expect("acknowledged lines");
+    let progress = client.reconnect().await.expect("reconnects");
+    assert_eq!(progress.last_acked_line, Some(last));
+    sim.wait_for(WAIT, |s| {
+        !s.frozen && s.state == MachineState::Idle && s.planner_used == 0
+    })
+    .await
+    .expect("the planner drains after the reconnect");
+    // Operator confirmation: the machine's log ends with the last acknowledged line, and
+    // (stronger) is the program up to it, line for line.
+    let idx = p.index_of_line(last).expect("a program line");
+    let executed = sim.executed_lines();
+    assert_eq!(
+        executed.last(),
+        Some(&p.lines()[idx].text),
+        "the log ends with line {last}"
+    );
+    assert_eq!(
+        executed,
+        texts(p)[..=idx].to_vec(),
+        "log == program up to line {last}"
+    );
+    p.lines()
+        .get(idx + 1)
+        .expect("the fault hit before the last line was acknowledged")
+        .number
+}
+
+#[tokio::test(start_paused = true)]
+async fn twenty_link_drops_then_resumes_lose_and_repeat_no_line() {
+    const DROPS: usize = 20;
+    for flow in [FlowControl::CharacterCounting, FlowControl::SendResponse] {
+        let p = program(1990);
+        assert!(p.len() > 1990, "about 2000 lines: {}", p.len());
+        // Every drop line loses one received line, so the simulator counts p.len() + DROPS
+        // lines in all; drops at or below p.len() are all reached.
+        let drops = distinct_lines(0x5eed_0001, DROPS, 10, p.len() as u64);
+        assert_eq!(drops.len(), DROPS);
+        let cfg = SimConfig {
+            faults: Faults {
+                drop_at_lines: drops.clone(),
+                ..Faults::default()
+            },
+            ..SimConfig::default()
+        };
+        let (sim, client) = in_process(cfg, flow).await;
+        let mut from = p.lines()[0].number;
+        let mut lost = 0;
+        let report = loop {
+            match client.stream_from(&p, from).await {
+                Ok(report) => break report,
+                Err(err) => {
+                    lost += 1;
+                    assert!(lost <= DROPS, "more link losses than drops: {err}");
+                    from = reconnect_and_confirm(&sim, &client, &p, &err).await;
+                }
+            }
+        };
+        assert_eq!(lost, DROPS, "every drop hit ({flow:?}, drops at {drops:?})");
+        assert_eq!(report.first_line, from);
+        assert_eq!(
+            report.last_line,
+            p.lines().last().unwrap().number,
+            "the last stream finished the program"
+        );
+        assert_eq!(
+            sim.executed_lines(),
+            texts(&p),
+            "executed log == program, line for line, across {} connections ({flow:?})",
+            DROPS + 1
+        );
+        let events = sim.events();
+        let connected = events
+            .iter()
+            .filter(|e| matches!(e, SimEvent::Connected { .. }))
+            .count();
+        let injected = events
+            .iter()
+            .filter(|e| matches!(e, SimEvent::Disconnected { injected: true, .. }))
+            .count();
+        assert_eq!(connected, DROPS + 1);
+        assert_eq!(injected, DROPS);
+        assert_eq!(client.progress().borrow().connections, DROPS as u64 + 1);
+        assert_eq!(sim.snapshot().received, (p.len() + DROPS) as u64);
+        assert!(!sim.overflowed());
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_silent_controller_is_a_link_loss_and_the_stream_resumes() {
+    for flow in [FlowControl::CharacterCounting, FlowControl::SendResponse] {
+        let cfg = SimConfig {
+            faults: Faults {
+                freeze_at_line: Some(150),
+                ..Faults::default()
+            },
+            ..SimConfig::default()
+        };
+        let p = program(300);
+        let (sim, client) = in_process(cfg, flow).await;
+        let config = client.config().clone();
+        let err = tokio::time::timeout(WAIT, client.stream(&p))
+            .await
+            .expect("the status watchdog ends a stream to a silent controller")
+            .expect_err("the controller froze mid-program");
+        assert_eq!(
+            err.fault,
+            Fault::LinkLost("no answer from the controller for 2.0 s".into()),
+            "{err}"
+        );
+        // Simulated time runs with tokio's clock (time_scale 1): the loss came one timeout
+        // after the freeze, give or take the poll that first went unanswered.
+        let frozen_at = sim
+            .events()
+            .iter()
+            .find_map(|e| match e {
+                SimEvent::Frozen { at_s, .. } => Some(*at_s),
+                _ => None,
+            })
+            .expect("the simulator froze");
+        let waited = sim.now_s() - frozen_at;
+        let timeout = config.status_timeout.as_secs_f64();
+        let period = config.status_period.as_secs_f64();
+        assert!(
+            waited >= timeout - 0.01 && waited <= timeout + period + 0.05,
+            "link dropped {waited:.3} s after the freeze"
+        );
+        // The controller never closed the link itself; the client did.
+        assert!(sim.snapshot().frozen);
+        assert!(!sim
+            .events()
+            .iter()
+            .any(|e| matches!(e, SimEvent::Disconnected { injected: true, .. })));
+        assert!(!client.progress().borrow().connected);
+        let resume_at = reconnect_and_confirm(&sim, &client, &p, &err).await;
+        client
+            .stream_from(&p, resume_at)
+            .await
+            .expect("resumed stream completes");
+        assert_eq!(sim.executed_lines(), texts(&p), "({flow:?})");
+        assert_eq!(client.progress().borrow().connections, 2);
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_long_slow_move_without_ok_is_not_a_link_loss() {
+    // 5 mm at 60 mm/min: 5 s a move. With the 15-block planner full, each further line's `ok`
+    // waits for a move to finish, well past the status timeout; status reports keep coming.
+    let mut text = String::from("G21 G90 G94\n");
+    for i in 1..=24 {
+        text += &format!("G1 X{} F60\n", if i % 2 == 1 { 5 } else { 0 });
+    }
+    let p = Program::parse(&text, CleanOptions::default()).unwrap();
+    let (sim, client) = in_process(SimConfig::default(), FlowControl::CharacterCounting).await;
+    let timeout = client.config().status_timeout;
+    let mut progress = client.progress();
+    let gaps = tokio::spawn(async move {
+        // The longest time between two acknowledgements while streaming.
+        let (mut acked, mut at, mut longest) = (0, tokio::time::Instant::now(), Duration::ZERO);
+        while progress.changed().await.is_ok() {
+            let p = progress.borrow_and_update().clone();
+            if p.lines_acked != acked {
+                longest = longest.max(at.elapsed());
+                acked = p.lines_acked;
+                at = tokio::time::Instant::now();
+            }
+            if p.lines_acked == 25 {
+                break;
+            }
+        }
+        longest
+    });
+    let report = tokio::time::timeout(WAIT * 2, client.stream(&p))
+        .await
+        .expect("finishes")
+        .expect("no fault: a withheld ok is not a dead controller");
+    assert_eq!(report.lines, 25);
+    assert_eq!(sim.executed_lines(), texts(&p));
+    let longest = gaps.await.unwrap();
+    assert!(
+        longest > timeout * 2,
+        "an ok was withheld for {longest:?}, longer than the {timeout:?} status timeout"
+    );
+    assert_eq!(client.progress().borrow().connections, 1);
+}
+
+#[tokio::test(start_paused = true)]
+async fn wait_for_gives_up_with_the_last_snapshot() {
+    let sim = sim::start(SimConfig::default());
+    let last = sim
+        .wait_for(Duration::from_secs(5), |s| s.state == MachineState::Run)
+        .await
+        .expect_err("nothing ever runs");
+    assert_eq!(last.state, MachineState::Idle);
+    assert!(!last.connected);
+    let now = sim
+        .wait_for(Duration::from_secs(5), |s| s.state == MachineState::Idle)
+        .await
+        .expect("already idle");
+    assert_eq!(now.executed, 0);
 }

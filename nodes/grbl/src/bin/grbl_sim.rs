@@ -5,6 +5,7 @@
 //! grbl_sim --tcp 127.0.0.1:2323              # telnet-style, like FluidNC
 //! grbl_sim --pty --link /tmp/grbl            # serial-style; open /tmp/grbl at 115200
 //! grbl_sim --tcp 127.0.0.1:2323 --drop-at-line 500 --ack-delay-ms 5 --log executed.nc
+//! grbl_sim --tcp 127.0.0.1:2323 --drop-at-line 200,900 --drop-at-line 1500 --freeze-at-line 2000
 //! ```
 
 use std::path::PathBuf;
@@ -38,9 +39,14 @@ struct Args {
     /// Rapid rate (mm/min).
     #[arg(long, default_value_t = 3000.0)]
     rapid_mm_min: f64,
-    /// Drop the link when this G-code line (count since start) arrives.
+    /// Drop the link when this G-code line (count since start) arrives; repeat the flag or
+    /// give a comma-separated list for several drops.
+    #[arg(long, value_name = "N", value_delimiter = ',')]
+    drop_at_line: Vec<u64>,
+    /// Freeze (read and answer nothing, link left open) when this G-code line arrives, until
+    /// the next connection.
     #[arg(long, value_name = "N")]
-    drop_at_line: Option<u64>,
+    freeze_at_line: Option<u64>,
     /// Raise ALARM:CODE when the move of G-code line N starts, as N:CODE.
     #[arg(long, value_name = "N:CODE", value_parser = parse_pair)]
     alarm_at_line: Option<(u64, u8)>,
@@ -94,7 +100,8 @@ async fn run(args: Args) -> Result<(), String> {
         axes,
         rapid_mm_min: args.rapid_mm_min,
         faults: Faults {
-            drop_at_line: args.drop_at_line,
+            drop_at_lines: args.drop_at_line,
+            freeze_at_line: args.freeze_at_line,
             alarm_at_line: args.alarm_at_line,
             error_at_line: args.error_at_line,
             ack_delay_s: args.ack_delay_ms / 1000.0,
@@ -149,4 +156,30 @@ async fn run(args: Args) -> Result<(), String> {
         let _ = std::fs::remove_file(link);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn drop_at_line_takes_repeats_and_lists() {
+        let a = Args::try_parse_from([
+            "grbl_sim",
+            "--tcp",
+            "127.0.0.1:0",
+            "--drop-at-line",
+            "500,20",
+            "--drop-at-line",
+            "900",
+            "--freeze-at-line",
+            "1200",
+        ])
+        .unwrap();
+        assert_eq!(a.drop_at_line, vec![500, 20, 900]);
+        assert_eq!(a.freeze_at_line, Some(1200));
+        let none = Args::try_parse_from(["grbl_sim", "--pty"]).unwrap();
+        assert!(none.drop_at_line.is_empty() && none.freeze_at_line.is_none());
+        assert!(Args::try_parse_from(["grbl_sim", "--drop-at-line", "5,x"]).is_err());
+    }
 }

@@ -25,8 +25,9 @@
 //! - **G-code errors**: GRBL's `error:N` codes for a useful subset of bad or unsupported
 //!   G-code (1, 2, 4, 20-36, 38), and
 //!   `error:9` while in alarm or jog.
-//! - **Faults** ([`Faults`]): link drop at line N, alarm at line N, forced `error:N` at line N,
-//!   slow acknowledgements.
+//! - **Faults** ([`Faults`]): link drops at lines N1, N2, ..., a controller that freezes at
+//!   line N (silent, link open), alarm at line N, forced `error:N` at line N, slow
+//!   acknowledgements.
 //!
 //! Every G-code line is recorded in the executed-line log when it takes effect: motion lines
 //! when their move completes, other lines when the planner reaches them (in program order). The
@@ -55,10 +56,18 @@ pub const BANNER: &str = "Grbl 1.1h ['$' for help]";
 /// started (1-based, `$` commands not counted), across connections; each fault fires once.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Faults {
-    /// When G-code line N has been received, drop the link: line N and everything still in the RX
-    /// buffer or on the wire are lost, output already queued is delivered, and the connection
-    /// closes. The planner keeps running what it holds (as a controller whose host went away).
-    pub drop_at_line: Option<u64>,
+    /// For each N listed, when G-code line N has been received, drop the link: line N and
+    /// everything still in the RX buffer or on the wire are lost, output already queued is
+    /// delivered, and the connection closes. The planner keeps running what it holds (as a
+    /// controller whose host went away). Each entry fires once; the order does not matter.
+    pub drop_at_lines: Vec<u64>,
+    /// When G-code line N has been received, the controller freezes: line N and everything
+    /// still in the RX buffer or on the wire are lost, and from then on nothing is read or
+    /// answered (real-time bytes included, so `?` gets no status report), but the connection
+    /// stays open. The planner keeps running what it holds. The next host to attach finds the
+    /// controller answering again (a hung USB-serial bridge or network stack that recovers on a
+    /// new connection).
+    pub freeze_at_line: Option<u64>,
     /// When the move of G-code line N starts, raise `ALARM:code` (1 or 2 behave like GRBL's
     /// critical hard/soft-limit alarms: motion killed, `[MSG:Reset to continue]`, nothing read
     /// until a reset).
@@ -157,6 +166,14 @@ pub enum SimEvent {
         /// Time (s).
         at_s: f64,
     },
+    /// The controller froze ([`Faults::freeze_at_line`]): from here until the next host
+    /// attaches it reads and answers nothing.
+    Frozen {
+        /// Connection that froze.
+        connection: u64,
+        /// Time (s).
+        at_s: f64,
+    },
     /// A byte arrived while the RX ring was full and was lost.
     RxOverflow {
         /// The lost byte.
@@ -218,6 +235,8 @@ pub struct SimSnapshot {
     pub rx_used: usize,
     /// Whether a host is connected.
     pub connected: bool,
+    /// The controller is frozen ([`Faults::freeze_at_line`]).
+    pub frozen: bool,
     /// Spindle (heat) on.
     pub spindle_on: bool,
     /// Executed lines so far.
@@ -309,6 +328,7 @@ pub fn start(config: SimConfig) -> SimHandle {
         planner_used: 0,
         rx_used: 0,
         connected: false,
+        frozen: false,
         spindle_on: false,
         executed: 0,
         received: 0,
@@ -451,11 +471,22 @@ impl SimHandle {
     }
 
     /// Waits until `pred` holds for a snapshot (snapshots are published after every step of the
-    /// simulation).
-    pub async fn wait_for(&self, mut pred: impl FnMut(&SimSnapshot) -> bool) -> SimSnapshot {
+    /// simulation), for at most `timeout` of tokio time. `Err` carries the latest snapshot when
+    /// the time ran out or the simulator stopped first, so a test can fail with it instead of
+    /// hanging.
+    pub async fn wait_for(
+        &self,
+        timeout: std::time::Duration,
+        mut pred: impl FnMut(&SimSnapshot) -> bool,
+    ) -> Result<SimSnapshot, SimSnapshot> {
         let mut rx = self.snapshot.clone();
-        let got = rx.wait_for(|s| pred(s)).await.map(|s| s.clone());
-        got.unwrap_or_else(|_| self.snapshot())
+        let got = tokio::time::timeout(timeout, rx.wait_for(|s| pred(s)))
+            .await
+            .map(|r| r.map(|s| s.clone()));
+        match got {
+            Ok(Ok(s)) => Ok(s),
+            Ok(Err(_)) | Err(_) => Err(self.snapshot()),
+        }
     }
 }
 
@@ -580,7 +611,9 @@ struct Machine {
     rapid_ovr: u16,
     spindle_ovr: u16,
     reports: u64,
-    fired_drop: bool,
+    fired_drops: Vec<u64>,
+    frozen: bool,
+    fired_freeze: bool,
     fired_alarm: bool,
     fired_error: bool,
 }
@@ -631,7 +664,9 @@ impl Machine {
             rapid_ovr: 100,
             spindle_ovr: 100,
             reports: 0,
-            fired_drop: false,
+            fired_drops: Vec::new(),
+            frozen: false,
+            fired_freeze: false,
             fired_alarm: false,
             fired_error: false,
         }
@@ -690,6 +725,8 @@ impl Machine {
                 reader,
             } => {
                 self.close_link(false);
+                // A new host finds a frozen controller answering again.
+                self.frozen = false;
                 self.connection = connection;
                 self.out = Some(out);
                 self.reader = Some(reader);
@@ -707,7 +744,8 @@ impl Machine {
                 at_s,
                 data,
             } => {
-                if connection != self.connection || self.out.is_none() {
+                // A frozen controller reads nothing: the bytes are lost.
+                if connection != self.connection || self.out.is_none() || self.frozen {
                     return;
                 }
                 let enter = (at_s + self.cfg.latency_s).max(self.t);
@@ -746,6 +784,20 @@ impl Machine {
         self.delayed.clear();
     }
 
+    /// Stops reading and answering with the link left open; the next attach ends it.
+    fn freeze(&mut self) {
+        self.frozen = true;
+        self.event(SimEvent::Frozen {
+            connection: self.connection,
+            at_s: self.t,
+        });
+        self.wire.clear();
+        self.rx.clear();
+        self.clear_line();
+        self.pending = None;
+        self.delayed.clear();
+    }
+
     fn clear_line(&mut self) {
         self.line.clear();
         self.raw.clear();
@@ -756,6 +808,9 @@ impl Machine {
 
     /// Queues `text` + `\r\n` for the host at the current simulated time.
     fn emit(&mut self, text: &str) {
+        if self.frozen {
+            return;
+        }
         let Some(out) = &self.out else { return };
         let mut bytes = text.as_bytes().to_vec();
         bytes.extend_from_slice(b"\r\n");
@@ -777,6 +832,7 @@ impl Machine {
             planner_used: self.planner_used,
             rx_used: self.rx.len(),
             connected: self.out.is_some(),
+            frozen: self.frozen,
             spindle_on: self.modal.spindle != Spindle::Off,
             executed,
             received: self.received,
@@ -1024,7 +1080,7 @@ impl Machine {
                 self.state = MachineState::Idle;
             }
             // The protocol loop.
-            if !self.critical_lock && self.t >= self.busy_until {
+            if !self.critical_lock && !self.frozen && self.t >= self.busy_until {
                 for d in std::mem::take(&mut self.delayed) {
                     self.emit(&d);
                 }
@@ -1046,6 +1102,9 @@ impl Machine {
     }
 
     fn receive_byte(&mut self, b: u8) {
+        if self.frozen {
+            return;
+        }
         if let Some(rt) = Realtime::from_byte(b) {
             self.realtime(rt);
             return;
@@ -1146,9 +1205,14 @@ impl Machine {
             }
             return done;
         }
-        if self.cfg.faults.drop_at_line == Some(p.seq) && !self.fired_drop {
-            self.fired_drop = true;
+        if self.cfg.faults.drop_at_lines.contains(&p.seq) && !self.fired_drops.contains(&p.seq) {
+            self.fired_drops.push(p.seq);
             self.close_link(true);
+            return true;
+        }
+        if self.cfg.faults.freeze_at_line == Some(p.seq) && !self.fired_freeze {
+            self.fired_freeze = true;
+            self.freeze();
             return true;
         }
         if let Some((n, code)) = self.cfg.faults.error_at_line {

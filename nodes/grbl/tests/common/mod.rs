@@ -1,6 +1,8 @@
 //! Shared helpers for the end-to-end tests.
 #![allow(dead_code)]
 
+use std::time::Duration;
+
 use cell_grbl::program::{CleanOptions, Program};
 use cell_grbl::sim::{self, SimConfig, SimHandle};
 use cell_grbl::stream::{ClientConfig, FlowControl, GrblClient};
@@ -26,6 +28,9 @@ pub fn program_text(n: usize) -> String {
     s += "M5\nG0 X0 Y0\nM2\n";
     s
 }
+
+/// How long (tokio time) a test waits on the simulator before failing instead of hanging.
+pub const WAIT: Duration = Duration::from_secs(120);
 
 pub fn program(n: usize) -> Program {
     Program::parse(&program_text(n), CleanOptions::default()).expect("test program is valid")
