@@ -257,7 +257,7 @@ pub struct MachineProgram {
     pub header: Header,
     /// Job the program was emitted for.
     pub job_id: String,
-    /// Output dialect: "grbl", "linuxcnc", "mach3", "marlin" or "abb_rapid".
+    /// Output dialect: "grbl", "linuxcnc", "mach3", "marlin" or "rapid" (ABB RAPID).
     pub dialect: String,
     /// Machine profile (a name under config/machines) the program was emitted for.
     pub machine_profile: String,

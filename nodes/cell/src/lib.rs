@@ -34,6 +34,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("monitor", cell_monitor::main),
     ("planner", cell_planner::node::main),
     ("emitter", cell_emitter::node::main),
+    ("machine_bridge", cell_bridge::node::main),
 ];
 
 #[derive(Parser, Debug)]

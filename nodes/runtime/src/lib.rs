@@ -28,7 +28,7 @@ use std::{future::Future, process::ExitCode};
 pub use node::{CellNode, FastPathMode, Network, NodeSetup};
 pub use pubsub::{Publisher, Received, Subscriber, Via};
 pub use qos::QosPreset;
-pub use rerun_sink::{RerunSink, RerunTarget};
+pub use rerun_sink::{MachineStatusLogger, RerunSink, RerunTarget};
 pub use service::{ServiceClient, ServiceServer};
 pub use shutdown::Shutdown;
 

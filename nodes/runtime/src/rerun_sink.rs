@@ -16,7 +16,9 @@
 //! | `/waam/toolpath`, `/waam/layers` | bead paths, slices                    | slicer           |
 //! | `/extrusion/toolpath`          | wing perimeters and spars               | slicer           |
 //! | `/emitter/log`                 | each program (job, profile, dialect, lines, SHA-256) and each refused toolpath | emitter |
-//! | `/machine/<id>/position`       | streamed machine position               | machine_bridge   |
+//! | `/machine/<id>/position`       | machine position now (tool and, on 4-axis machines, second carriage) | machine_bridge |
+//! | `/machine/<id>/trace/<n>`      | the path the machine has moved, in chunks | machine_bridge |
+//! | `/machine/<id>/{buffer_fill,feed_mm_s,acked_line}` | scalars over time | machine_bridge |
 //! | `/monitor/<topic>`             | whatever the monitor node received      | monitor          |
 //!
 //! [`toolpath_entity`] gives the default path for a `Toolpath` by its process. Timelines:
@@ -28,7 +30,7 @@
 
 use std::path::PathBuf;
 
-use cell_msgs::{HeatMap, Toolpath, ToolpathSegment};
+use cell_msgs::{HeatMap, MachineStatus, Toolpath, ToolpathSegment};
 use rerun::RecordingStream;
 
 /// Where a node's Rerun data goes.
@@ -216,6 +218,110 @@ impl RerunSink {
     }
 }
 
+/// Points per trace chunk entity: each chunk is logged once, so a long job costs O(points).
+const TRACE_CHUNK_POINTS: usize = 64;
+
+/// Smallest move (mm) that adds a point to a trace.
+const TRACE_MIN_STEP_MM: f32 = 0.01;
+
+/// Logs `MachineStatus` messages (see the module table): the position now, the path moved so
+/// far as line-strip chunks under `trace/` (cleared when a new job starts) and the buffer
+/// fill, feed and acknowledged line as scalars. Keeps one trace per machine; the live bridge
+/// and bag conversion use the same logger, so both draw the same thing.
+#[derive(Debug, Default)]
+pub struct MachineStatusLogger {
+    traces: std::collections::HashMap<String, MachineTrace>,
+}
+
+#[derive(Debug, Default)]
+struct MachineTrace {
+    job_id: String,
+    /// Points not yet logged as a chunk, after the previous chunk's last point.
+    pending: Vec<[[f32; 3]; 2]>,
+    chunks: u64,
+}
+
+/// The tool point (X, Y, Z) and the second carriage (U, V, W, or A, B, C on Mach3-style
+/// 4-axis foam cutters), from named axes; absent axes are 0.
+fn carriage_points(status: &MachineStatus) -> Option<([f32; 3], Option<[f32; 3]>)> {
+    let get = |name: &str| {
+        status
+            .axis_names
+            .iter()
+            .position(|n| n.eq_ignore_ascii_case(name))
+            .and_then(|i| status.axis_positions.get(i))
+            .map(|v| *v as f32)
+    };
+    let pick = |names: [&str; 3]| {
+        let v = names.map(&get);
+        v.iter()
+            .any(Option::is_some)
+            .then(|| v.map(|x| x.unwrap_or(0.0)))
+    };
+    let tool = pick(["X", "Y", "Z"])?;
+    let second = pick(["U", "V", "W"]).or_else(|| pick(["A", "B", "C"]));
+    Some((tool, second))
+}
+
+impl MachineStatusLogger {
+    /// Logs one status at the sink's current time.
+    pub fn log(&mut self, sink: &RerunSink, status: &MachineStatus) {
+        let Some(rec) = sink.stream() else { return };
+        let base = format!("/machine/{}", status.machine_id);
+        let trace = self.traces.entry(status.machine_id.clone()).or_default();
+        if trace.job_id != status.job_id {
+            if trace.chunks > 0 || !trace.pending.is_empty() {
+                sink.report(rec.log(format!("{base}/trace"), &rerun::Clear::recursive()));
+            }
+            *trace = MachineTrace {
+                job_id: status.job_id.clone(),
+                ..MachineTrace::default()
+            };
+        }
+        if let Some((tool, second)) = carriage_points(status) {
+            let mut points = vec![tool];
+            points.extend(second);
+            sink.report(rec.log(
+                format!("{base}/position"),
+                &rerun::Points3D::new(points).with_radii([1.5]),
+            ));
+            let here = [tool, second.unwrap_or(tool)];
+            let moved = trace.pending.last().is_none_or(|last| {
+                let d = |a: [f32; 3], b: [f32; 3]| {
+                    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f32>().sqrt()
+                };
+                d(last[0], here[0]) > TRACE_MIN_STEP_MM || d(last[1], here[1]) > TRACE_MIN_STEP_MM
+            });
+            if moved {
+                trace.pending.push(here);
+            }
+            if trace.pending.len() > TRACE_CHUNK_POINTS {
+                let chunk = trace.chunks;
+                let tool_strip: Vec<[f32; 3]> = trace.pending.iter().map(|p| p[0]).collect();
+                let mut strips = vec![tool_strip];
+                if second.is_some() {
+                    strips.push(trace.pending.iter().map(|p| p[1]).collect());
+                }
+                sink.report(rec.log(
+                    format!("{base}/trace/{chunk}"),
+                    &rerun::LineStrips3D::new(strips),
+                ));
+                trace.chunks += 1;
+                // The next chunk starts where this one ended, so the path has no gaps.
+                let last = *trace.pending.last().expect("more than one point");
+                trace.pending = vec![last];
+            }
+        }
+        for (name, value) in [
+            ("buffer_fill", f64::from(status.buffer_fill)),
+            ("feed_mm_s", f64::from(status.feed_mm_s)),
+            ("acked_line", f64::from(status.acked_line)),
+        ] {
+            sink.report(rec.log(format!("{base}/{name}"), &rerun::Scalars::single(value)));
+        }
+    }
+}
+
 /// Default entity path for a toolpath, by process (see the table in the module docs).
 pub fn toolpath_entity(toolpath: &Toolpath) -> &'static str {
     match toolpath.process {
@@ -239,6 +345,27 @@ fn segment_color(seg: &ToolpathSegment) -> rerun::Color {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn carriage_points_come_from_named_axes() {
+        let status = |names: &[&str], pos: &[f64]| MachineStatus {
+            axis_names: names.iter().map(|s| s.to_string()).collect(),
+            axis_positions: pos.to_vec(),
+            ..MachineStatus::default()
+        };
+        let (tool, second) =
+            carriage_points(&status(&["X", "Y", "U", "V"], &[1.0, 2.0, 3.0, 4.0])).unwrap();
+        assert_eq!((tool, second), ([1.0, 2.0, 0.0], Some([3.0, 4.0, 0.0])));
+        let (tool, second) =
+            carriage_points(&status(&["X", "Y", "A", "B"], &[1.0, 2.0, 3.0, 4.0])).unwrap();
+        assert_eq!((tool, second), ([1.0, 2.0, 0.0], Some([3.0, 4.0, 0.0])));
+        let (tool, second) = carriage_points(&status(&["X", "Y", "Z"], &[1.0, 2.0, 3.0])).unwrap();
+        assert_eq!((tool, second), ([1.0, 2.0, 3.0], None));
+        assert!(carriage_points(&status(&[], &[])).is_none());
+        // Fewer positions than names (a controller reporting fewer axes): the rest are absent.
+        let (tool, second) = carriage_points(&status(&["X", "Y", "U"], &[1.0, 2.0])).unwrap();
+        assert_eq!((tool, second), ([1.0, 2.0, 0.0], None));
+    }
 
     #[test]
     fn parses_targets() {

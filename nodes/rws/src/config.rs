@@ -10,6 +10,9 @@
 //! task: T_ROB1                   # default
 //! program_dir: cellsuite         # under the controller's HOME; default
 //! timeouts: {connect_s: 5.0, request_s: 30.0}
+//! protocol: rws                  # optional; the machine bridge reads it
+//! heat_off_outputs:              # written after an abort; default none
+//!   - {signal: doWeld, value: "0"}
 //! ```
 //!
 //! Credentials never sit in the YAML: a `password` (or `user`) key anywhere in the file is
@@ -223,6 +226,25 @@ pub struct ControllerConfig {
     /// controllers ship one; prefer installing a proper certificate.
     #[serde(default)]
     pub accept_invalid_certs: bool,
+    /// `rws` when given (the machine bridge's controller files name their protocol; a GRBL
+    /// controller file says `grbl` and is not read by this crate).
+    #[serde(default)]
+    pub protocol: Option<String>,
+    /// Outputs written, in order, after a program is stopped by an abort, so the heat is off
+    /// even if RAPID stopped between a `SetDO doWeld, 1` and its `SetDO doWeld, 0`. Arc-welding
+    /// cells (`ArcL`) stop the arc with the program and need none.
+    #[serde(default)]
+    pub heat_off_outputs: Vec<SignalValue>,
+}
+
+/// A signal and the value to write to it.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SignalValue {
+    /// Signal name: bare on RobotWare 6 (`doWeld`), `NETWORK/DEVICE/NAME` on RobotWare 7.
+    pub signal: String,
+    /// Value as RWS writes it (`0`/`1` for digital signals).
+    pub value: String,
 }
 
 /// Errors reading a controller configuration or its credentials.
@@ -277,8 +299,8 @@ pub enum ConfigError {
 }
 
 /// serde_norway's message without its own path prefix and `at line L column C` suffix (the
-/// error carries both separately).
-fn clean_message(mut m: String) -> String {
+/// error carries both separately). Other YAML readers of controller files use it too.
+pub fn clean_message(mut m: String) -> String {
     if let Some(i) = m.rfind(" at line ") {
         if m[i..].contains(" column ") {
             m.truncate(i);
@@ -417,6 +439,20 @@ impl ControllerConfig {
         if self.task.trim().is_empty() {
             return Err(invalid("task", "empty".into()));
         }
+        if let Some(p) = self.protocol.as_deref().filter(|p| *p != "rws") {
+            return Err(invalid(
+                "protocol",
+                format!("{p:?}: an RWS controller file says `rws`"),
+            ));
+        }
+        for (i, out) in self.heat_off_outputs.iter().enumerate() {
+            if out.signal.trim().is_empty() || out.value.trim().is_empty() {
+                return Err(invalid(
+                    &format!("heat_off_outputs[{i}]"),
+                    "signal and value must not be empty".into(),
+                ));
+            }
+        }
         if self
             .program_dir
             .split('/')
@@ -453,6 +489,8 @@ impl ControllerConfig {
             task: default_task(),
             program_dir: default_program_dir(),
             accept_invalid_certs: false,
+            protocol: None,
+            heat_off_outputs: Vec::new(),
         }
     }
 }

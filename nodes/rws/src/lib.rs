@@ -31,5 +31,7 @@ pub mod error;
 pub mod sim;
 
 pub use client::{ExecState, ExecutionState, InstalledProgram, RwsClient};
-pub use config::{ControllerConfig, Credentials, CredentialsSource, RwsVersion, Timeouts};
+pub use config::{
+    ControllerConfig, Credentials, CredentialsSource, RwsVersion, SignalValue, Timeouts,
+};
 pub use error::{AbbStatus, RwsError};

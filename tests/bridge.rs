@@ -1,0 +1,806 @@
+//! machine_bridge end to end, over real DDS: goals and commands from an operator node, the
+//! bridge node, and the in-repo GRBL 1.1 and RWS simulators reached over loopback TCP/HTTP
+//! exactly as real controllers would be. The programs are the emitter's own output.
+//!
+//! No wall-clock assertions except the documented "within one status cycle" of a hold, which
+//! uses a 0.5 s cycle so a loaded machine has room.
+
+mod common;
+
+use std::path::Path;
+use std::time::Duration;
+
+use cell_bridge::node::{run, BridgeParams};
+use cell_grbl::program::{CleanOptions, Program};
+use cell_grbl::protocol::{MachineState, Realtime};
+use cell_grbl::sim::{self, Faults, SimConfig, SimEvent, SimHandle};
+use cell_msgs::geometry_msgs::Point;
+use cell_msgs::{
+    ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult as R, MachineCommand,
+    MachineProgram, MachineStatus, SendMachineCommandRequest, SendMachineCommandResponse, Toolpath,
+    ToolpathSegment,
+};
+use cell_profiles::MachineProfile;
+use cell_runtime::action::ActionClient;
+use cell_runtime::{CellNode, QosPreset, Subscriber};
+use common::{fresh_domain, node, within, DELIVERY_TIMEOUT};
+use futures::StreamExt;
+
+type Client = ActionClient<ExecuteProgramGoal, R, ExecuteProgramFeedback>;
+
+/// A 4-axis hot-wire wing panel with `n` cut points: lead-in, an airfoil-like loop (root on
+/// X/Y, a smaller tip on U/V), lead-out.
+fn wing_panel(job_id: &str, n: usize) -> Toolpath {
+    let p = |x: f64, y: f64| Point { x, y, z: 0.0 };
+    let lead = |from: (f64, f64), to: (f64, f64)| ToolpathSegment {
+        kind: ToolpathSegment::KIND_LEAD,
+        points: vec![p(from.0, from.1), p(to.0, to.1)],
+        secondary_points: vec![p(from.0, from.1), p(to.0, to.1)],
+        feed_mm_s: vec![6.0, 6.0],
+        power: vec![1.5, 1.5],
+        ..ToolpathSegment::default()
+    };
+    let (mut root, mut tip) = (Vec::new(), Vec::new());
+    for i in 0..=n {
+        let t = std::f64::consts::TAU * i as f64 / n as f64;
+        let (c, s) = (t.cos(), t.sin());
+        root.push(p(90.0 + 60.0 * c, 60.0 + 8.0 * s * (1.0 + 0.3 * c)));
+        tip.push(p(95.0 + 45.0 * c, 60.0 + 6.0 * s * (1.0 + 0.3 * c)));
+    }
+    let cut = ToolpathSegment {
+        kind: ToolpathSegment::KIND_CUT,
+        feed_mm_s: vec![4.0; root.len()],
+        power: vec![1.5; root.len()],
+        points: root,
+        secondary_points: tip,
+        ..ToolpathSegment::default()
+    };
+    Toolpath {
+        job_id: job_id.into(),
+        process: Toolpath::PROCESS_HOTWIRE,
+        power_unit: Toolpath::POWER_WIRE_CURRENT_A,
+        plane_separation_mm: 1000.0,
+        segments: vec![
+            lead((160.0, 60.0), (150.0, 60.0)),
+            cut,
+            lead((150.0, 60.0), (160.0, 60.0)),
+        ],
+        ..Toolpath::default()
+    }
+}
+
+/// The emitter's GRBL program for the panel.
+fn grbl_program(job_id: &str, n: usize) -> MachineProgram {
+    let profile = MachineProfile::resolve("grbl-xyuv").unwrap();
+    cell_emitter::emit_program(&wing_panel(job_id, n), &profile, job_id).expect("emits")
+}
+
+/// What the controller is sent: the program's G-code lines, comments and blanks dropped.
+fn sent_lines(program: &MachineProgram) -> Program {
+    Program::parse(&program.files[0].text, CleanOptions::default()).unwrap()
+}
+
+fn texts(p: &Program) -> Vec<String> {
+    p.lines().iter().map(|l| l.text.clone()).collect()
+}
+
+/// A GRBL simulator on loopback TCP and a controller file for it.
+async fn grbl_sim(
+    dir: &Path,
+    id: &str,
+    faults: Faults,
+    time_scale: f64,
+    extra: &str,
+) -> (SimHandle, String) {
+    let sim = sim::start(SimConfig {
+        time_scale,
+        axes: vec!['X', 'Y', 'U', 'V'],
+        faults,
+        ..SimConfig::default()
+    });
+    let addr = sim.listen_tcp("127.0.0.1:0").await.unwrap();
+    let path = dir.join(format!("{id}.yaml"));
+    std::fs::write(
+        &path,
+        format!(
+            "id: {id}\nprotocol: grbl\nmachine_profile: grbl-xyuv\naxes: XYUV\n\
+             endpoint: {{tcp: '{addr}'}}\nreconnect: {{attempts: 20, delay_s: 0.05}}\n{extra}"
+        ),
+    )
+    .unwrap();
+    (sim, path.display().to_string())
+}
+
+struct Operator {
+    node: CellNode,
+    client: Client,
+    status: Subscriber<MachineStatus>,
+}
+
+async fn operator(domain: u16) -> Operator {
+    let node = node("operator", domain, false);
+    let client = node
+        .action_client::<ExecuteProgramGoal, R, ExecuteProgramFeedback>("/execute_program")
+        .unwrap();
+    let status = node
+        .subscriber::<MachineStatus>("/machine_status", QosPreset::Status)
+        .unwrap();
+    assert!(
+        node.wait_for_action_server("/execute_program", DELIVERY_TIMEOUT)
+            .await,
+        "bridge never discovered"
+    );
+    Operator {
+        node,
+        client,
+        status,
+    }
+}
+
+/// Sends a goal and waits for its result, collecting feedback on the way.
+async fn execute(
+    client: &Client,
+    goal: ExecuteProgramGoal,
+    patience: Duration,
+) -> (R, Vec<ExecuteProgramFeedback>) {
+    let (goal_id, response) = within(client.async_send_goal(goal)).await.expect("sent");
+    assert!(response.accepted, "the bridge accepts every goal");
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    let result =
+        cell_runtime::action::request_result(client, goal_id, Duration::from_secs(3), patience);
+    let mut result = std::pin::pin!(result);
+    let mut seen = Vec::new();
+    let mut open = true;
+    let (_, result) = loop {
+        tokio::select! {
+            r = &mut result => break r.expect("result"),
+            f = feedback.next(), if open => match f {
+                Some(Ok(f)) => seen.push(f),
+                Some(Err(_)) => {}
+                None => open = false,
+            },
+        }
+    };
+    (result, seen)
+}
+
+/// Waits for a `MachineStatus` of `machine` stamped from now on that satisfies `pred` (older
+/// ones still queued in the subscription are skipped).
+async fn status_until(
+    sub: &mut Subscriber<MachineStatus>,
+    machine: &str,
+    pred: impl Fn(&MachineStatus) -> bool,
+) -> MachineStatus {
+    let secs = |t: &cell_msgs::builtin_interfaces::Time| t.sec as f64 + t.nanosec as f64 * 1e-9;
+    let from = secs(&cell_msgs::builtin_interfaces::Time::now());
+    within(async {
+        loop {
+            let s = sub.recv().await.expect("status stream").message;
+            if s.machine_id == machine && secs(&s.header.stamp) >= from && pred(&s) {
+                return s;
+            }
+        }
+    })
+    .await
+}
+
+fn goal(program: &MachineProgram, machine_id: &str) -> ExecuteProgramGoal {
+    ExecuteProgramGoal {
+        program: program.clone(),
+        machine_id: machine_id.into(),
+        start_line: 0,
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_program_goes_through_the_bridge_and_the_simulator_executes_it_line_for_line() {
+    cell_runtime::logging::init(Some("info"));
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, file) = grbl_sim(dir.path(), "cutter", Faults::default(), 20.0, "").await;
+    let domain = fresh_domain();
+    let bridge = tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers: vec![file],
+            ..BridgeParams::default()
+        },
+    ));
+    let mut op = operator(domain).await;
+    let program = grbl_program("wing-e2e", 400);
+    let sent = sent_lines(&program);
+    assert!(sent.len() > 400, "{} lines", sent.len());
+
+    // Status flows before any goal, with the controller's axes.
+    let idle = status_until(&mut op.status, "cutter", |s| {
+        s.state == MachineStatus::STATE_IDLE
+    })
+    .await;
+    assert_eq!(idle.axis_names, ["X", "Y", "U", "V"]);
+    assert_eq!(idle.axis_positions.len(), 4);
+
+    // Statuses are gathered while the goal runs.
+    let status_sub = std::mem::replace(
+        &mut op.status,
+        op.node
+            .subscriber::<MachineStatus>("/machine_status", QosPreset::Status)
+            .unwrap(),
+    );
+    let watch = tokio::spawn(async move {
+        let mut sub = status_sub;
+        let mut seen = Vec::new();
+        while let Ok(Some(r)) = tokio::time::timeout(Duration::from_secs(3), sub.recv()).await {
+            let done = r.message.state == MachineStatus::STATE_DONE;
+            seen.push(r.message);
+            if done {
+                break;
+            }
+        }
+        seen
+    });
+    // An empty machine_id: the controller for the program's machine profile.
+    let (result, feedback) =
+        execute(&op.client, goal(&program, ""), Duration::from_secs(300)).await;
+    assert!(result.success, "{}", result.message);
+    assert_eq!(result.outcome, R::OUTCOME_FINISHED);
+    let last = sent.lines().last().unwrap().number as u32;
+    assert_eq!((result.line, result.last_acked_line), (last, last));
+    assert_eq!(result.reconnects, 0);
+    assert_eq!(
+        sim.executed_lines(),
+        texts(&sent),
+        "the simulator executed the program, line for line"
+    );
+    assert!(
+        !sim.overflowed(),
+        "character counting never overflows the RX buffer"
+    );
+    assert!(!sim.snapshot().spindle_on, "heat off at the end (M5)");
+
+    assert!(!feedback.is_empty(), "feedback while running");
+    assert!(
+        feedback
+            .windows(2)
+            .all(|w| w[0].acked_line <= w[1].acked_line),
+        "acknowledged lines never go back"
+    );
+    assert!(feedback.iter().all(|f| f.total_lines == program.line_count));
+    assert!(feedback
+        .iter()
+        .any(|f| f.state == MachineStatus::STATE_RUNNING));
+
+    let statuses = watch.await.unwrap();
+    assert!(statuses
+        .iter()
+        .any(|s| s.state == MachineStatus::STATE_RUNNING && s.job_id == "wing-e2e"));
+    assert!(
+        statuses.iter().any(|s| s.buffer_fill > 0.0),
+        "buffer fill reported"
+    );
+    assert!(statuses.iter().any(|s| s.feed_mm_s > 0.0), "feed reported");
+    assert_eq!(statuses.last().unwrap().state, MachineStatus::STATE_DONE);
+    assert_eq!(statuses.last().unwrap().acked_line, last);
+    // At least 5 Hz: the median spacing of the stamps (the bridge publishes at 10 Hz).
+    let mut gaps: Vec<f64> = statuses
+        .windows(2)
+        .map(|w| {
+            let t = |s: &MachineStatus| {
+                s.header.stamp.sec as f64 + s.header.stamp.nanosec as f64 * 1e-9
+            };
+            t(&w[1]) - t(&w[0])
+        })
+        .collect();
+    gaps.sort_by(f64::total_cmp);
+    assert!(gaps.len() > 5, "{} statuses", statuses.len());
+    assert!(
+        gaps[gaps.len() / 2] <= 0.2,
+        "median status spacing {} s",
+        gaps[gaps.len() / 2]
+    );
+
+    // A program in another dialect is refused with its reason; the bridge stays up.
+    let linuxcnc = cell_emitter::emit_program(
+        &wing_panel("wrong-dialect", 20),
+        &MachineProfile::resolve("linuxcnc-xyuv").unwrap(),
+        "wrong-dialect",
+    )
+    .unwrap();
+    let (refused, _) = execute(&op.client, goal(&linuxcnc, "cutter"), DELIVERY_TIMEOUT).await;
+    assert_eq!(refused.outcome, R::OUTCOME_REFUSED);
+    assert!(
+        refused.message.contains("\"linuxcnc\""),
+        "{}",
+        refused.message
+    );
+    let (unknown, _) = execute(&op.client, goal(&program, "lathe"), DELIVERY_TIMEOUT).await;
+    assert_eq!(unknown.outcome, R::OUTCOME_REFUSED);
+    assert!(
+        unknown.message.contains("\"lathe\"") && unknown.message.contains("cutter"),
+        "{}",
+        unknown.message
+    );
+    assert_eq!(
+        sim.executed_lines().len(),
+        sent.len(),
+        "nothing more was sent"
+    );
+    assert!(!bridge.is_finished(), "the bridge stays up");
+    bridge.abort();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn twenty_link_drops_are_resumed_with_no_line_lost_or_repeated() {
+    let program = grbl_program("wing-drops", 1500);
+    let sent = sent_lines(&program);
+    // 20 distinct drop points spread over the program, from a fixed-seed LCG.
+    let mut seed = 0x5eed_u64;
+    let mut drops: Vec<u64> = Vec::new();
+    while drops.len() < 20 {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        let line = 20 + (seed >> 33) % (sent.len() as u64 - 40);
+        if !drops.contains(&line) {
+            drops.push(line);
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, file) = grbl_sim(
+        dir.path(),
+        "flaky",
+        Faults {
+            drop_at_lines: drops.clone(),
+            ..Faults::default()
+        },
+        50.0,
+        "resume_after_link_drop: auto\n",
+    )
+    .await;
+    let domain = fresh_domain();
+    let bridge = tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers: vec![file],
+            ..BridgeParams::default()
+        },
+    ));
+    let op = operator(domain).await;
+    let (result, _) = execute(
+        &op.client,
+        goal(&program, "flaky"),
+        Duration::from_secs(600),
+    )
+    .await;
+    assert!(result.success, "{}", result.message);
+    assert_eq!(result.reconnects, 20, "{}", result.message);
+    let injected = sim
+        .events()
+        .iter()
+        .filter(|e| matches!(e, SimEvent::Disconnected { injected: true, .. }))
+        .count();
+    assert_eq!(injected, 20, "every drop hit");
+    assert_eq!(
+        sim.executed_lines(),
+        texts(&sent),
+        "no line lost, none repeated across 21 connections"
+    );
+    bridge.abort();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn after_a_drop_the_operator_resumes_from_the_reported_line() {
+    let program = grbl_program("wing-resume", 300);
+    let sent = sent_lines(&program);
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, file) = grbl_sim(
+        dir.path(),
+        "serial-like",
+        Faults {
+            drop_at_lines: vec![150],
+            ..Faults::default()
+        },
+        50.0,
+        "resume_after_link_drop: operator\n",
+    )
+    .await;
+    let domain = fresh_domain();
+    let bridge = tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers: vec![file],
+            ..BridgeParams::default()
+        },
+    ));
+    let mut op = operator(domain).await;
+    let (lost, _) = execute(&op.client, goal(&program, ""), Duration::from_secs(300)).await;
+    assert_eq!(lost.outcome, R::OUTCOME_LINK_LOST, "{}", lost.message);
+    let acked = lost.last_acked_line as usize;
+    assert!(acked > 0);
+    let next = sent.lines()[sent.index_of_line(acked).unwrap() + 1].number;
+    assert!(
+        lost.message.contains(&format!("start_line {}", acked + 1)),
+        "{}",
+        lost.message
+    );
+    // The bridge reconnects by itself; the machine finishes what its planner held.
+    status_until(&mut op.status, "serial-like", |s| {
+        s.state == MachineStatus::STATE_IDLE
+    })
+    .await;
+    sim.wait_for(Duration::from_secs(60), |s| {
+        s.state == MachineState::Idle && s.planner_used == 0
+    })
+    .await
+    .expect("planner drains");
+    let executed = sim.executed_lines();
+    let acked_index = sent.index_of_line(acked).unwrap();
+    assert_eq!(
+        executed,
+        texts(&sent)[..=acked_index],
+        "the machine ran up to the acknowledged line"
+    );
+
+    let (resumed, _) = execute(
+        &op.client,
+        ExecuteProgramGoal {
+            start_line: next as u32,
+            ..goal(&program, "")
+        },
+        Duration::from_secs(300),
+    )
+    .await;
+    assert!(resumed.success, "{}", resumed.message);
+    assert_eq!(
+        sim.executed_lines(),
+        texts(&sent),
+        "no line lost, none repeated"
+    );
+    bridge.abort();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn alarms_and_bad_lines_stop_the_program_and_name_the_line() {
+    let program = grbl_program("wing-faults", 300);
+    let sent = sent_lines(&program);
+    let dir = tempfile::tempdir().unwrap();
+    let alarm_at = 120u64;
+    let error_at = 80u64;
+    let (alarm_sim, alarm_file) = grbl_sim(
+        dir.path(),
+        "alarming",
+        Faults {
+            alarm_at_line: Some((alarm_at, 2)),
+            ..Faults::default()
+        },
+        20.0,
+        "",
+    )
+    .await;
+    let (error_sim, error_file) = grbl_sim(
+        dir.path(),
+        "picky",
+        Faults {
+            error_at_line: Some((error_at, 33)),
+            ..Faults::default()
+        },
+        20.0,
+        "",
+    )
+    .await;
+    let domain = fresh_domain();
+    let bridge = tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers: vec![alarm_file, error_file],
+            ..BridgeParams::default()
+        },
+    ));
+    let mut op = operator(domain).await;
+
+    let (alarm, _) = execute(
+        &op.client,
+        goal(&program, "alarming"),
+        Duration::from_secs(300),
+    )
+    .await;
+    assert_eq!(alarm.outcome, R::OUTCOME_ALARM, "{}", alarm.message);
+    assert!(alarm.message.contains("ALARM:2"), "{}", alarm.message);
+    assert_eq!(alarm.final_state, MachineStatus::STATE_ALARM);
+    let s = status_until(&mut op.status, "alarming", |s| {
+        s.state == MachineStatus::STATE_ALARM
+    })
+    .await;
+    assert!(s.alarm.contains("ALARM:2 Soft limit"), "{}", s.alarm);
+    // Streaming stopped at once: only lines already on the wire when the alarm came arrived,
+    // and the machine ran nothing past the alarmed line.
+    let snap = alarm_sim.snapshot();
+    let alarm_seq = alarm_at as usize;
+    assert!(
+        snap.received as usize <= alarm_seq + 127 / 4,
+        "{} lines received after an alarm at line {alarm_seq}",
+        snap.received
+    );
+    assert!(alarm_sim.executed_lines().len() < alarm_seq);
+    assert!(!snap.spindle_on, "heat off after the alarm");
+
+    let (rejected, _) = execute(
+        &op.client,
+        goal(&program, "picky"),
+        Duration::from_secs(300),
+    )
+    .await;
+    assert_eq!(
+        rejected.outcome,
+        R::OUTCOME_REJECTED_LINE,
+        "{}",
+        rejected.message
+    );
+    // The simulator counts G-code lines; the bridge reports the program's own line number.
+    let bad = &sent.lines()[error_at as usize - 1];
+    assert_eq!(rejected.line as usize, bad.number, "{}", rejected.message);
+    assert!(
+        rejected.message.contains("error:33"),
+        "{}",
+        rejected.message
+    );
+    assert!(
+        rejected.message.contains(&format!("line {}", bad.number)),
+        "{}",
+        rejected.message
+    );
+    assert!(
+        rejected.message.contains("heat off confirmed"),
+        "{}",
+        rejected.message
+    );
+    assert!(!error_sim.snapshot().spindle_on);
+    assert!(!bridge.is_finished());
+    bridge.abort();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn hold_resume_and_abort_from_topic_and_service_act_within_one_status_cycle() {
+    let program = grbl_program("wing-hold", 300);
+    let sent = sent_lines(&program);
+    let dir = tempfile::tempdir().unwrap();
+    // Real time, and a 0.5 s status cycle: the hold must reach the machine within it.
+    let (sim, file) = grbl_sim(
+        dir.path(),
+        "held",
+        Faults::default(),
+        1.0,
+        "status_period_s: 0.5\n",
+    )
+    .await;
+    let domain = fresh_domain();
+    let bridge = tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers: vec![file],
+            ..BridgeParams::default()
+        },
+    ));
+    let mut op = operator(domain).await;
+    let commands = op
+        .node
+        .publisher::<MachineCommand>("/machine_command", QosPreset::Status)
+        .unwrap();
+    let service = op
+        .node
+        .service_client::<SendMachineCommandRequest, SendMachineCommandResponse>("/machine_command")
+        .unwrap();
+    assert!(commands.wait_for_subscribers(1, DELIVERY_TIMEOUT).await);
+    assert!(
+        op.node
+            .wait_for_service("/machine_command", DELIVERY_TIMEOUT)
+            .await
+    );
+
+    let call = |command: u8, machine_id: &str, value: u16| {
+        service.call(
+            SendMachineCommandRequest {
+                command: MachineCommand {
+                    machine_id: machine_id.into(),
+                    command,
+                    value,
+                },
+            },
+            DELIVERY_TIMEOUT,
+        )
+    };
+    let Operator { client, status, .. } = &mut op;
+
+    // Goal 1: hold on the topic, resume in the service; every line runs once.
+    let operate = async {
+        status_until(status, "held", |s| {
+            s.state == MachineStatus::STATE_RUNNING && s.acked_line > 20
+        })
+        .await;
+        let asked_at = sim.now_s();
+        commands
+            .publish(MachineCommand {
+                machine_id: "held".into(),
+                command: MachineCommand::COMMAND_HOLD,
+                value: 0,
+            })
+            .await
+            .unwrap();
+        let held = status_until(status, "held", |s| s.state == MachineStatus::STATE_HOLD).await;
+        let hold_arrived = sim
+            .events()
+            .iter()
+            .find_map(|e| match e {
+                SimEvent::Realtime {
+                    command: Realtime::FeedHold,
+                    at_s,
+                    ..
+                } => Some(*at_s),
+                _ => None,
+            })
+            .expect("the machine got the feed hold");
+        assert!(
+            hold_arrived - asked_at < 0.5,
+            "hold reached the machine {:.3} s after it was asked for; the status cycle is 0.5 s",
+            hold_arrived - asked_at
+        );
+        assert!(held.acked_line > 0);
+        let executed_in_hold = sim.executed_lines().len();
+        tokio::time::sleep(Duration::from_millis(800)).await;
+        let snap = sim.snapshot();
+        assert!(
+            matches!(snap.state, MachineState::Hold(_)),
+            "{:?}",
+            snap.state
+        );
+        assert!(
+            sim.executed_lines().len() <= executed_in_hold + 1,
+            "nothing runs in a hold"
+        );
+        let answer = call(MachineCommand::COMMAND_RESUME, "held", 0)
+            .await
+            .unwrap();
+        assert!(answer.success, "{}", answer.message);
+    };
+    let ((result, _), ()) = tokio::join!(
+        execute(client, goal(&program, "held"), Duration::from_secs(600)),
+        operate
+    );
+    assert!(result.success, "{}", result.message);
+    assert_eq!(sim.executed_lines(), texts(&sent));
+
+    // Overrides out of range are refused with the range.
+    let answer = call(MachineCommand::COMMAND_FEED_OVERRIDE, "held", 500)
+        .await
+        .unwrap();
+    assert!(
+        !answer.success && answer.message.contains("10..200"),
+        "{}",
+        answer.message
+    );
+
+    // Goal 2: abort (e-stop, every machine) in the service: the goal ends aborted, heat off.
+    let operate = async {
+        status_until(status, "held", |s| {
+            s.state == MachineStatus::STATE_RUNNING && s.acked_line > 20
+        })
+        .await;
+        assert!(sim.snapshot().spindle_on, "cutting with the heat on");
+        let answer = call(MachineCommand::COMMAND_ABORT, "", 0).await.unwrap();
+        assert!(answer.success, "{}", answer.message);
+    };
+    let ((aborted, _), ()) = tokio::join!(
+        execute(client, goal(&program, "held"), Duration::from_secs(600)),
+        operate
+    );
+    assert_eq!(aborted.outcome, R::OUTCOME_ABORTED, "{}", aborted.message);
+    assert!(
+        aborted.message.contains("heat off confirmed"),
+        "{}",
+        aborted.message
+    );
+    assert!(!sim.snapshot().spindle_on, "heat off after the abort");
+    assert!(!bridge.is_finished());
+    bridge.abort();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rapid_programs_run_on_the_rws_simulator_and_a_wrong_password_is_refused() {
+    use cell_rws::sim::{RwsSim, SimConfig as RwsSimConfig};
+    use cell_rws::RwsVersion;
+    let rws = RwsSim::start(RwsSimConfig::new(RwsVersion::Rw6, "Operator", "weld:on-42"))
+        .await
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("good.cred"), "Operator:weld:on-42\n").unwrap();
+    std::fs::write(dir.path().join("bad.cred"), "Operator:guess\n").unwrap();
+    let controller = |id: &str, cred: &str| {
+        let path = dir.path().join(format!("{id}.yaml"));
+        std::fs::write(
+            &path,
+            format!(
+                "id: {id}\nprotocol: rws\nrws: rw6\nport: {}\ncredentials: {{file: {cred}}}\n",
+                rws.addr().port()
+            ),
+        )
+        .unwrap();
+        path.display().to_string()
+    };
+    let good = controller("irb2600", "good.cred");
+    let bad = controller("intruder", "bad.cred");
+    let domain = fresh_domain();
+    let bridge = tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers: vec![good, bad],
+            ..BridgeParams::default()
+        },
+    ));
+    let mut op = operator(domain).await;
+    let wall: Toolpath = cell_msgs::json::from_str(
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/toolpaths/wall.json"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let program = cell_emitter::emit_program(
+        &wall,
+        &MachineProfile::resolve("abb-irb2600-waam").unwrap(),
+        "wall-9",
+    )
+    .unwrap();
+
+    let (result, _) = execute(
+        &op.client,
+        goal(&program, "irb2600"),
+        Duration::from_secs(120),
+    )
+    .await;
+    assert!(result.success, "{}", result.message);
+    assert_eq!(result.outcome, R::OUTCOME_FINISHED);
+    let modules = rws.modules();
+    assert_eq!(modules.len(), program.files.len() - 1, "{modules:?}");
+    for f in &program.files {
+        assert_eq!(
+            rws.file(&format!("cellsuite/{}", f.name)).as_deref(),
+            Some(f.text.as_bytes()),
+            "{} uploaded byte for byte",
+            f.name
+        );
+    }
+    status_until(&mut op.status, "irb2600", |s| {
+        s.state == MachineStatus::STATE_DONE
+    })
+    .await;
+
+    let (refused, _) = execute(
+        &op.client,
+        goal(&program, "intruder"),
+        Duration::from_secs(120),
+    )
+    .await;
+    assert_eq!(refused.outcome, R::OUTCOME_REFUSED, "{}", refused.message);
+    assert!(refused.message.contains("intruder"), "{}", refused.message);
+    assert!(
+        refused.message.to_lowercase().contains("credentials") || refused.message.contains("401"),
+        "{}",
+        refused.message
+    );
+    let s = status_until(&mut op.status, "intruder", |s| {
+        s.state == MachineStatus::STATE_DISCONNECTED
+    })
+    .await;
+    assert!(!s.alarm.is_empty());
+    // A G-code program is not for a robot.
+    let (wrong, _) = execute(
+        &op.client,
+        goal(&grbl_program("g", 10), "irb2600"),
+        DELIVERY_TIMEOUT,
+    )
+    .await;
+    assert_eq!(wrong.outcome, R::OUTCOME_REFUSED);
+    assert!(wrong.message.contains("RAPID"), "{}", wrong.message);
+    assert!(!bridge.is_finished());
+    bridge.abort();
+}
