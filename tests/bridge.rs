@@ -75,6 +75,18 @@ fn grbl_program(job_id: &str, n: usize) -> MachineProgram {
     cell_emitter::emit_program(&wing_panel(job_id, n), &profile, job_id).expect("emits")
 }
 
+/// The emitter's program for a sample toolpath under `tests/data/toolpaths/`.
+fn emitted(sample: &str, profile: &str, job_id: &str) -> MachineProgram {
+    let path = format!(
+        "{}/tests/data/toolpaths/{sample}.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let toolpath: Toolpath =
+        cell_msgs::json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let profile = MachineProfile::resolve(profile).unwrap();
+    cell_emitter::emit_program(&toolpath, &profile, job_id).expect("emits")
+}
+
 /// What the controller is sent: the program's G-code lines, comments and blanks dropped.
 fn sent_lines(program: &MachineProgram) -> Program {
     Program::parse(&program.files[0].text, CleanOptions::default()).unwrap()
@@ -148,7 +160,9 @@ async fn execute(
     let feedback = client.feedback_stream(goal_id);
     let mut feedback = std::pin::pin!(feedback);
     let result =
-        cell_runtime::action::request_result(client, goal_id, Duration::from_secs(3), patience);
+        // One request, held open for the whole run: a retry would drop the request the bridge
+        // answers when the program ends (see `request_result`).
+        cell_runtime::action::request_result(client, goal_id, patience, patience);
     let mut result = std::pin::pin!(result);
     let mut seen = Vec::new();
     let mut open = true;
@@ -199,8 +213,13 @@ async fn a_program_goes_through_the_bridge_and_the_simulator_executes_it_line_fo
     let dir = tempfile::tempdir().unwrap();
     let (sim, file) = grbl_sim(dir.path(), "cutter", Faults::default(), 20.0, "").await;
     let domain = fresh_domain();
+    let rrd = dir.path().join("bridge.rrd");
+    let mut setup = cell_runtime::NodeSetup::local("machine_bridge", domain);
+    setup.fast_path = cell_runtime::FastPathMode::Off;
+    setup.rerun = format!("save:{}", rrd.display()).parse().unwrap();
+    let shutdown = setup.shutdown.clone();
     let bridge = tokio::spawn(run(
-        node("machine_bridge", domain, false),
+        CellNode::new(setup).unwrap(),
         BridgeParams {
             controllers: vec![file],
             ..BridgeParams::default()
@@ -325,7 +344,25 @@ async fn a_program_goes_through_the_bridge_and_the_simulator_executes_it_line_fo
         "nothing more was sent"
     );
     assert!(!bridge.is_finished(), "the bridge stays up");
-    bridge.abort();
+
+    // The Rerun recording decodes with Rerun's own decoder and holds the machine's entities.
+    shutdown.trigger();
+    within(bridge).await.unwrap().unwrap();
+    let reader = std::io::BufReader::new(std::fs::File::open(&rrd).unwrap());
+    let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
+        .expect("a valid .rrd")
+        .collect::<Result<_, _>>()
+        .expect("decodes");
+    let dump = format!("{messages:?}");
+    for entity in [
+        "/machine/cutter/position",
+        "/machine/cutter/trace/0",
+        "/machine/cutter/buffer_fill",
+        "/machine/cutter/acked_line",
+        "/machine/log",
+    ] {
+        assert!(dump.contains(entity), "bridge.rrd has no {entity}");
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -736,20 +773,7 @@ async fn rapid_programs_run_on_the_rws_simulator_and_a_wrong_password_is_refused
         },
     ));
     let mut op = operator(domain).await;
-    let wall: Toolpath = cell_msgs::json::from_str(
-        &std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/tests/data/toolpaths/wall.json"
-        ))
-        .unwrap(),
-    )
-    .unwrap();
-    let program = cell_emitter::emit_program(
-        &wall,
-        &MachineProfile::resolve("abb-irb2600-waam").unwrap(),
-        "wall-9",
-    )
-    .unwrap();
+    let program = emitted("wall", "abb-irb2600-waam", "wall-9");
 
     let (result, _) = execute(
         &op.client,
@@ -803,4 +827,64 @@ async fn rapid_programs_run_on_the_rws_simulator_and_a_wrong_password_is_refused
     assert!(wrong.message.contains("RAPID"), "{}", wrong.message);
     assert!(!bridge.is_finished());
     bridge.abort();
+}
+
+const CELL: &str = env!("CARGO_BIN_EXE_cell");
+
+fn cell(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(CELL)
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run cell")
+}
+
+#[test]
+fn cell_stream_runs_a_program_file_on_the_simulator_and_names_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    };
+    // The planner's own tapered wing (`cell hotwire … --profile grbl-xyuv`).
+    let program = emitted("wing", "grbl-xyuv", "wing");
+    let good = write("wing.ngc", &program.files[0].text);
+    let out = cell(&["stream", "--controller", "grbl-sim", "--program", &good]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let sent = sent_lines(&program).len();
+    assert!(
+        stdout.contains(&format!("{sent} lines streamed to grbl-sim")),
+        "{stdout}"
+    );
+
+    // G1 before any feed: GRBL answers error:22; the line is named by its number in the file.
+    let bad = write(
+        "bad.ngc",
+        "(no feed yet)\nG21 G90 G94\nG1 X5 Y5\nG1 X6 Y6 F100\n",
+    );
+    let out = cell(&["stream", "--controller", "grbl-sim", "--program", &bad]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("line 3") && err.contains("error:22"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+
+    let broken = write("broken.ngc", "G21\nG1 X1 (unclosed F100\n");
+    let out = cell(&["stream", "--controller", "grbl-sim", "--program", &broken]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(65), "{err}");
+    assert!(err.contains("line 2") && err.contains("comment"), "{err}");
+
+    let out = cell(&["stream", "--controller", "haas-vf2", "--program", &good]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(64), "{err}");
+    assert!(
+        err.contains("haas-vf2") && err.contains("grbl-sim"),
+        "{err}"
+    );
 }

@@ -11,9 +11,13 @@
 //!   with `--profile`, the machine program (see [`hotwire`]).
 //! - `cell emit --toolpath FILE --profile NAME --out FILE` turns a toolpath file into a machine
 //!   program on the spot (see [`emit`]).
+//! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
+//!   with a progress bar, through the machine bridge's controller code, without DDS (see
+//!   [`stream`]).
 
 pub mod emit;
 pub mod hotwire;
+pub mod stream;
 
 use std::{path::PathBuf, process::ExitCode};
 
@@ -77,6 +81,11 @@ enum Command {
     /// DDS. Exit status: 64 bad arguments or profile, 65 a toolpath the emitter refuses (no
     /// file is written), 1 the output cannot be written.
     Emit(emit::EmitArgs),
+    /// Run a program file on one controller (GRBL or ABB RWS) without DDS, with a progress bar;
+    /// Ctrl-C aborts with a safe stop. `--controller grbl-sim` starts the in-repo simulator.
+    /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
+    /// arguments or controller file, 65 a program the controller refuses.
+    Stream(stream::StreamArgs),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
     Node {
         /// The node's exec name.
@@ -130,6 +139,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         }
         Command::Hotwire(args) => hotwire::run(*args),
         Command::Emit(args) => emit::run(args),
+        Command::Stream(args) => stream::run(args),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
             rerun,

@@ -20,16 +20,13 @@ pub use ros2_client::action::{
 };
 pub use ros2_client::action_msgs::{GoalId, GoalStatusEnum};
 
-/// Asks for a goal's result, asking again after `retry_every`, then after twice that, and so on
-/// (at most a minute apart), until `timeout`.
+/// Asks for a goal's result, asking again every `retry_every` until `timeout`.
 ///
-/// ROS 2 services are volatile: a request the server reads before it has matched our reply
-/// reader is answered into the void, and a request sent before the server matched us is lost.
-/// So the request is repeated (each retry is logged; the backoff keeps a long goal from
-/// piling up requests at the server), and an answer to
-/// *any* of the requests sent counts: the server answers only the first request it reads once
-/// the goal ends, which, for a goal longer than `retry_every`, is an early one. (Waiting on
-/// each request in turn, as `async_request_result` does, would miss that answer.)
+/// ROS 2 services are volatile: a reply the server sends before it has matched our reply reader
+/// is lost, and the call would wait forever. Asking for a result is idempotent, so asking again
+/// is safe; each retry is logged. A retry gives up on the earlier request, and the server
+/// answers only the first request it reads once the goal has ended: so `retry_every` must be
+/// longer than the goal runs (a machine program: minutes), or its answer is missed.
 pub async fn request_result<G, R, F>(
     client: &ActionClient<G, R, F>,
     goal_id: GoalId,
@@ -41,40 +38,18 @@ where
     R: ros2_client::Message + Clone + 'static,
     F: ros2_client::Message + 'static,
 {
-    use tokio::time::Instant;
-    /// Answers are polled this often; a result arrives once per goal, so this costs nothing.
-    const POLL: std::time::Duration = std::time::Duration::from_millis(20);
-    let deadline = Instant::now() + timeout;
-    let mut asked = Vec::new();
-    let mut next_ask = Instant::now();
+    let deadline = tokio::time::Instant::now() + timeout;
     loop {
-        let now = Instant::now();
-        if now >= next_ask {
-            if !asked.is_empty() {
+        let attempt =
+            retry_every.min(deadline.saturating_duration_since(tokio::time::Instant::now()));
+        match tokio::time::timeout(attempt, client.async_request_result(goal_id)).await {
+            Ok(Ok(answer)) => return Ok(answer),
+            Ok(Err(e)) => return Err(anyhow!("result of goal {goal_id:?}: {e:?}")),
+            Err(_) if tokio::time::Instant::now() < deadline => {
                 tracing::debug!("no result for goal {goal_id:?} yet; asking again");
             }
-            let id = client
-                .request_result(goal_id)
-                .map_err(|e| anyhow!("result of goal {goal_id:?}: {e:?}"))?;
-            asked.push(id);
-            let backoff = 1u32 << (asked.len() - 1).min(16);
-            next_ask = now + (retry_every * backoff).min(std::time::Duration::from_secs(60));
+            Err(_) => return Err(anyhow!("no result for goal {goal_id:?} within {timeout:?}")),
         }
-        loop {
-            match client.result_client().receive_response() {
-                Ok(Some((id, answer))) if asked.contains(&id) => {
-                    return Ok((answer.status, answer.result))
-                }
-                // An answer to another client of the same action.
-                Ok(Some(_)) => continue,
-                Ok(None) => break,
-                Err(e) => return Err(anyhow!("result of goal {goal_id:?}: {e:?}")),
-            }
-        }
-        if now >= deadline {
-            return Err(anyhow!("no result for goal {goal_id:?} within {timeout:?}"));
-        }
-        tokio::time::sleep(POLL).await;
     }
 }
 

@@ -225,7 +225,8 @@ const TRACE_CHUNK_POINTS: usize = 64;
 const TRACE_MIN_STEP_MM: f32 = 0.01;
 
 /// Logs `MachineStatus` messages (see the module table): the position now, the path moved so
-/// far as line-strip chunks under `trace/` (cleared when a new job starts) and the buffer
+/// far as line-strip chunks under `trace/` (a chunk per 64 points or whenever the machine
+/// stops running; cleared when a new job starts) and the buffer
 /// fill, feed and acknowledged line as scalars. Keeps one trace per machine; the live bridge
 /// and bag conversion use the same logger, so both draw the same thing.
 #[derive(Debug, Default)]
@@ -295,7 +296,10 @@ impl MachineStatusLogger {
             if moved {
                 trace.pending.push(here);
             }
-            if trace.pending.len() > TRACE_CHUNK_POINTS {
+            // A full chunk goes out, and so does the rest once the machine stops moving, so a
+            // finished job's whole path is in the recording.
+            let stopped = status.state != MachineStatus::STATE_RUNNING;
+            if trace.pending.len() > TRACE_CHUNK_POINTS || (stopped && trace.pending.len() > 1) {
                 let chunk = trace.chunks;
                 let tool_strip: Vec<[f32; 3]> = trace.pending.iter().map(|p| p[0]).collect();
                 let mut strips = vec![tool_strip];

@@ -527,7 +527,12 @@ fn committed_controller_configs_parse() {
     let mut n = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
-        if path.extension().is_some_and(|e| e == "yaml") {
+        // GRBL controllers share the directory; they are the machine bridge's to read.
+        let grbl = std::fs::read_to_string(&path)
+            .unwrap()
+            .lines()
+            .any(|l| l.trim() == "protocol: grbl");
+        if path.extension().is_some_and(|e| e == "yaml") && !grbl {
             let r = ControllerConfig::load(&path);
             // An https URL needs the `tls` feature; everything else must parse.
             match r {
