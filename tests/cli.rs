@@ -38,11 +38,21 @@ fn assert_clear_error(out: &Output, needles: &[&str]) {
 }
 
 #[test]
-fn demo_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
+fn probe_launch_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
     let rrd = tempfile::tempdir().unwrap();
     let save = format!("save:{}", rrd.path().display());
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("launch_scripts/probe.launch.yaml");
     let out = cell(
-        &["demo", "--rerun", &save, "heat_map_frames:=30"],
+        &[
+            "demo",
+            "--file",
+            file.to_str().unwrap(),
+            "--until",
+            "monitor",
+            "--rerun",
+            &save,
+            "heat_map_frames:=30",
+        ],
         common::fresh_domain(),
     );
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
@@ -94,6 +104,59 @@ fn demo_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
         for entity in entities {
             assert!(dump.contains(entity), "{} has no {entity}", file.display());
         }
+    }
+}
+
+#[test]
+fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
+    let out_dir = tempfile::tempdir().unwrap();
+    let out = cell(
+        &[
+            "demo",
+            "--out",
+            out_dir.path().to_str().unwrap(),
+            "iterations:=60",
+        ],
+        common::fresh_domain(),
+    );
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(
+        out.status.success(),
+        "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}"
+    );
+    // 60 iterations for each of the panel's two sections, root and tip.
+    assert!(stdout.contains("| plan    | 120 iterations"), "{stdout}");
+    let machine = stdout
+        .lines()
+        .find(|l| l.contains("| machine |"))
+        .unwrap_or_else(|| panic!("no machine row in {stdout}"));
+    assert!(machine.contains("finished"), "{machine}");
+    assert!(machine.contains(", 0 link drops"), "{machine}");
+    // The program the emitter wrote is the one the machine ran, to its last line.
+    let program = std::fs::read_to_string(out_dir.path().join("demo-wing.ngc")).unwrap();
+    let lines = program.lines().count();
+    assert!(lines > 100, "{lines} lines");
+    assert!(
+        machine.contains(&format!("line {lines} of {lines} acknowledged")),
+        "{machine}"
+    );
+    assert!(program.contains("G93"), "4-axis inverse-time program");
+    // One Rerun recording for the whole cell, decodable, with every node's entities.
+    let rrd = out_dir.path().join("cell.rrd");
+    let reader = std::io::BufReader::new(std::fs::File::open(&rrd).unwrap());
+    let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
+        .expect("a valid .rrd")
+        .collect::<Result<_, _>>()
+        .expect("decodes");
+    let dump = format!("{messages:?}");
+    for entity in [
+        "/hotwire/trajectory",
+        "/hotwire/loss",
+        "/emitter/log",
+        "/machine/grbl-sim/position",
+        "/machine/grbl-sim/trace/0",
+    ] {
+        assert!(dump.contains(entity), "cell.rrd has no {entity}");
     }
 }
 

@@ -3,7 +3,8 @@
 //! - `cell launch FILE [NAME:=VALUE …]` starts the nodes of a ROS 2 YAML launch file and
 //!   supervises them (see [`cell_launch`]).
 //! - `cell demo` runs the demo cell from `launch_scripts/demo.launch.yaml` (embedded in the
-//!   binary, so it works from any directory).
+//!   binary, so it works from any directory): a hot-wire wing planned, emitted and streamed to
+//!   the GRBL simulator; programs and `cell.rrd` in `demo-out/`.
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
 //! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
@@ -17,6 +18,7 @@
 
 pub mod emit;
 pub mod hotwire;
+pub mod rrd;
 pub mod stream;
 
 use std::{path::PathBuf, process::ExitCode};
@@ -39,6 +41,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("planner", cell_planner::node::main),
     ("emitter", cell_emitter::node::main),
     ("machine_bridge", cell_bridge::node::main),
+    ("job_runner", cell_runner::main),
 ];
 
 #[derive(Parser, Debug)]
@@ -62,15 +65,25 @@ enum Command {
         #[arg(value_name = "NAME:=VALUE")]
         args: Vec<String>,
     },
-    /// Run the demo cell: a probe publishes a Toolpath and HeatMaps, a monitor receives them.
+    /// Run the demo cell: a hot-wire wing planned, emitted for the 4-axis GRBL cutter and
+    /// streamed to the in-repo GRBL simulator, with a summary table at the end. Writes the
+    /// program and `cell.rrd` (every node's Rerun log in one recording) to --out.
     Demo {
-        /// Rerun output for every node: `off`, `save:DIR` (one .rrd per node) or `connect:HOST:PORT`.
-        #[arg(long, default_value = "off")]
+        /// Output directory: the programs, `rrd/<node>.rrd` and the merged `cell.rrd`.
+        #[arg(long, default_value = "demo-out")]
+        out: PathBuf,
+        /// Rerun output for every node: `save` (into --out, merged into cell.rrd), `off`,
+        /// `save:DIR` (one .rrd per node in DIR) or `connect:HOST:PORT`.
+        #[arg(long, default_value = "save")]
         rerun: String,
-        /// Use this launch file instead of the built-in demo.
+        /// Use this launch file instead of the built-in demo (e.g.
+        /// launch_scripts/probe.launch.yaml, the wiring check).
         #[arg(long)]
         file: Option<PathBuf>,
-        /// Further launch arguments, `NAME:=VALUE`.
+        /// The node whose exit ends the run (the others are then stopped).
+        #[arg(long, default_value = "job_runner")]
+        until: String,
+        /// Further launch arguments, `NAME:=VALUE` (e.g. `iterations:=2000`).
         #[arg(value_name = "NAME:=VALUE")]
         args: Vec<String>,
     },
@@ -142,22 +155,47 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Command::Stream(args) => stream::run(args),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
+            out,
             rerun,
             file,
+            until,
             mut args,
         } => {
+            let rrd_dir = out.join("rrd");
             let rerun = match rerun.split_once(':') {
+                _ if rerun == "save" => {
+                    format!("save:{}", rrd_dir.join("{node}.rrd").display())
+                }
                 Some(("save", dir)) => {
                     format!("save:{}", PathBuf::from(dir).join("{node}.rrd").display())
                 }
                 _ => rerun,
             };
+            let merge = rerun.starts_with(&format!("save:{}", rrd_dir.display()));
+            if let Err(e) = std::fs::create_dir_all(&out) {
+                eprintln!("error: --out {}: {e}", out.display());
+                return ExitCode::from(cell_runtime::EXIT_USAGE);
+            }
             args.insert(0, format!("rerun:={rerun}"));
             let source = match file {
                 Some(path) => LaunchSource::File(path),
-                None => LaunchSource::Embedded,
+                None => {
+                    args.insert(1, format!("out:={}", out.display()));
+                    LaunchSource::Embedded
+                }
             };
-            run_launch(source, args, Some(StopOthersWhen::Node("monitor".into())))
+            let status = run_launch(source, args, Some(StopOthersWhen::Node(until)));
+            if merge {
+                let cell_rrd = out.join("cell.rrd");
+                match rrd::merge_dir(&rrd_dir, &cell_rrd) {
+                    Ok(n) => println!(
+                        "cell: {} ({n} Rerun messages from every node)",
+                        cell_rrd.display()
+                    ),
+                    Err(e) => eprintln!("error: {}: {e:#}", cell_rrd.display()),
+                }
+            }
+            status
         }
     }
 }

@@ -8,10 +8,14 @@ use tracing_subscriber::EnvFilter;
 /// warnings (no multicast on `lo`, peers whose locators are not confirmed yet) and, on loopback,
 /// an error when it leaves a multicast group it never joined; those bury the cell's own
 /// messages, so rustdds is held to errors and its UDP listener is silent unless asked for
-/// (e.g. `RUST_LOG=info,rustdds=warn`).
+/// (e.g. `RUST_LOG=info,rustdds=warn`). ros2-client warns on every service request that rustdds
+/// sends without a related sample identity, which is how this DDS stack always sends them; and
+/// Rerun's chunk store warns about out-of-order timelines, which the planner's loss curve
+/// (logged live, then whole) has by design.
 pub const QUIET_DEPENDENCIES: &str =
     "rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
-     ros2_client::distributions=error,iceoryx2=warn,re_sdk=warn";
+     ros2_client::distributions=error,ros2_client::service::wrappers=error,iceoryx2=warn,\
+     re_sdk=warn,re_chunk=error";
 
 /// Installs the global subscriber: `RUST_LOG` if set (plus [`QUIET_DEPENDENCIES`] for crates it
 /// does not mention), else `default_level`. Safe to call more than once (later calls do nothing),

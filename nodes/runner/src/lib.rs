@@ -1,0 +1,325 @@
+//! The `job_runner` node: runs one hot-wire job through the cell, as an operator would.
+//!
+//! 1. Sends a `plan_hotwire` goal to the planner and follows its feedback.
+//! 2. Waits for the emitter's `MachineProgram` for that job on `program_topic`.
+//! 3. Sends it to the machine_bridge as an `execute_program` goal and follows it.
+//! 4. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
+//!    stage and why.
+//!
+//! `cell demo` runs it with a reduced iteration count and stops the other nodes once it exits.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{anyhow, bail, Context as _};
+use cell_msgs::{
+    ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, MachineProgram,
+    PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult,
+};
+use cell_runtime::action::{request_result, ActionClient, GoalStatusEnum};
+use cell_runtime::{CellNode, QosPreset};
+use futures::StreamExt;
+use serde::{Deserialize, Serialize};
+
+/// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunnerParams {
+    /// Job id, carried into the toolpath and the program.
+    pub job_id: String,
+    /// Root airfoil (a name under config/airfoils or a .dat path).
+    pub root_airfoil: String,
+    /// Root chord (mm).
+    pub root_chord_mm: f64,
+    /// Tip airfoil; empty: the root's.
+    pub tip_airfoil: String,
+    /// Tip chord (mm); 0: the root's.
+    pub tip_chord_mm: f64,
+    /// Tip sweep (mm).
+    pub tip_sweep_mm: f64,
+    /// Tip twist (deg).
+    pub tip_twist_deg: f64,
+    /// Panel span (mm); 0: the planner's.
+    pub span_mm: f64,
+    /// Foam.
+    pub material: String,
+    /// Machine profile to plan and emit for.
+    pub machine_profile: String,
+    /// PSO iterations; 0: the planner's.
+    pub iterations: u32,
+    /// RNG seed.
+    pub seed: u64,
+    /// Controller for `execute_program`; empty: the bridge's choice.
+    pub machine_id: String,
+    /// Where the emitter publishes programs.
+    pub program_topic: String,
+    /// Give up after this long (s).
+    pub timeout_s: f64,
+}
+
+impl Default for RunnerParams {
+    fn default() -> Self {
+        RunnerParams {
+            job_id: "demo-wing".into(),
+            root_airfoil: "s1223".into(),
+            root_chord_mm: 200.0,
+            tip_airfoil: String::new(),
+            tip_chord_mm: 150.0,
+            tip_sweep_mm: 20.0,
+            tip_twist_deg: 0.0,
+            span_mm: 0.0,
+            material: "EPS".into(),
+            machine_profile: "grbl-xyuv".into(),
+            iterations: 0,
+            seed: 1,
+            machine_id: String::new(),
+            program_topic: "machine_program".into(),
+            timeout_s: 900.0,
+        }
+    }
+}
+
+/// What each stage gave, for the summary.
+#[derive(Debug, Clone, Default)]
+pub struct JobSummary {
+    /// The plan's result.
+    pub plan: PlanHotwireResult,
+    /// Planning time.
+    pub plan_time: Duration,
+    /// Iterations the planner ran.
+    pub iterations: u32,
+    /// The program.
+    pub program: MachineProgram,
+    /// The run's result.
+    pub run: ExecuteProgramResult,
+    /// Running time.
+    pub run_time: Duration,
+}
+
+impl std::fmt::Display for JobSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let outcome = match self.run.outcome {
+            ExecuteProgramResult::OUTCOME_FINISHED => "finished",
+            ExecuteProgramResult::OUTCOME_ABORTED => "aborted",
+            ExecuteProgramResult::OUTCOME_ALARM => "alarm",
+            ExecuteProgramResult::OUTCOME_REJECTED_LINE => "line rejected",
+            ExecuteProgramResult::OUTCOME_LINK_LOST => "link lost",
+            _ => "refused",
+        };
+        writeln!(f, "| stage   | result |")?;
+        writeln!(f, "|---------|--------|")?;
+        writeln!(
+            f,
+            "| plan    | {} iterations in {:.1} s; exposure loss {:.4e} -> {:.4e} |",
+            self.iterations,
+            self.plan_time.as_secs_f64(),
+            self.plan.baseline_loss,
+            self.plan.final_loss
+        )?;
+        let sha = self
+            .program
+            .sha256
+            .get(..12)
+            .unwrap_or(&self.program.sha256);
+        writeln!(
+            f,
+            "| program | {} ({}, {} lines, sha256 {sha}…) |",
+            self.program
+                .files
+                .first()
+                .map_or("-", |file| file.name.as_str()),
+            self.program.dialect,
+            self.program.line_count
+        )?;
+        write!(
+            f,
+            "| machine | {outcome}: line {} of {} acknowledged in {:.1} s, {} link drops |",
+            self.run.last_acked_line,
+            self.program.line_count,
+            self.run_time.as_secs_f64(),
+            self.run.reconnects
+        )
+    }
+}
+
+type PlanClient = ActionClient<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>;
+type RunClient = ActionClient<ExecuteProgramGoal, ExecuteProgramResult, ExecuteProgramFeedback>;
+
+/// Sends a goal and waits for its result, logging feedback through `describe` at most once a
+/// second.
+async fn follow<G, R, F>(
+    client: &ActionClient<G, R, F>,
+    goal: G,
+    what: &str,
+    timeout: Duration,
+    describe: impl Fn(&F) -> String,
+) -> anyhow::Result<(GoalStatusEnum, R)>
+where
+    G: ros2_client::Message + Clone + 'static,
+    R: ros2_client::Message + Clone + 'static,
+    F: ros2_client::Message + 'static,
+{
+    let (goal_id, response) = tokio::time::timeout(timeout, client.async_send_goal(goal))
+        .await
+        .map_err(|_| anyhow!("{what}: no answer to the goal within {timeout:?}"))?
+        .map_err(|e| anyhow!("{what}: goal not sent: {e:?}"))?;
+    if !response.accepted {
+        bail!("{what}: the goal was rejected");
+    }
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    // One request held open for the whole goal (see `request_result`).
+    let result = request_result(client, goal_id, timeout, timeout);
+    let mut result = std::pin::pin!(result);
+    let mut last_log = Instant::now() - Duration::from_secs(10);
+    let mut open = true;
+    loop {
+        tokio::select! {
+            r = &mut result => return r.with_context(|| what.to_owned()),
+            f = feedback.next(), if open => match f {
+                Some(Ok(f)) if last_log.elapsed() >= Duration::from_secs(1) => {
+                    last_log = Instant::now();
+                    tracing::info!("{what}: {}", describe(&f));
+                }
+                Some(_) => {}
+                None => open = false,
+            },
+        }
+    }
+}
+
+/// Runs the job through the cell.
+///
+/// # Errors
+/// A stage that fails or times out, named with its reason.
+pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSummary> {
+    let timeout = Duration::from_secs_f64(p.timeout_s.max(1.0));
+    let plan_client: PlanClient = node.action_client("plan_hotwire")?;
+    let run_client: RunClient = node.action_client("execute_program")?;
+    let mut programs = node.subscriber::<MachineProgram>(&p.program_topic, QosPreset::Plan)?;
+    for action in ["plan_hotwire", "execute_program"] {
+        if !node.wait_for_action_server(action, timeout).await {
+            bail!(
+                "no {} server within {timeout:?}",
+                node.resolve_topic(action)
+            );
+        }
+    }
+
+    let goal = PlanHotwireGoal {
+        job_id: p.job_id.clone(),
+        root_airfoil: p.root_airfoil.clone(),
+        tip_airfoil: p.tip_airfoil.clone(),
+        root_chord_mm: p.root_chord_mm,
+        tip_chord_mm: p.tip_chord_mm,
+        tip_twist_deg: p.tip_twist_deg,
+        tip_sweep_mm: p.tip_sweep_mm,
+        span_mm: p.span_mm,
+        material: p.material.clone(),
+        cse: 0.0,
+        machine_profile: p.machine_profile.clone(),
+        iterations: p.iterations,
+        seed: p.seed,
+    };
+    tracing::info!(
+        "planning {} ({} at {} mm)",
+        p.job_id,
+        p.root_airfoil,
+        p.root_chord_mm
+    );
+    let t0 = Instant::now();
+    let last_iteration = std::sync::atomic::AtomicU32::new(0);
+    let (status, plan) = follow(&plan_client, goal, "plan_hotwire", timeout, |f| {
+        last_iteration.store(f.total_iterations, std::sync::atomic::Ordering::Relaxed);
+        format!(
+            "iteration {}/{}, best loss {:.4e}, {:.0} s to go",
+            f.iteration, f.total_iterations, f.best_loss, f.eta_s
+        )
+    })
+    .await?;
+    if status != GoalStatusEnum::Succeeded || !plan.success {
+        bail!("plan_hotwire: {}", plan.message);
+    }
+    let plan_time = t0.elapsed();
+    tracing::info!("{}", plan.message);
+
+    let program = tokio::time::timeout(timeout, async {
+        loop {
+            match programs.recv().await {
+                Some(r) if r.message.job_id == p.job_id => return Ok(r.message),
+                Some(_) => continue,
+                None => return Err(anyhow!("{}: the subscription ended", p.program_topic)),
+            }
+        }
+    })
+    .await
+    .map_err(|_| {
+        anyhow!(
+            "no program for {} on {} within {timeout:?}",
+            p.job_id,
+            p.program_topic
+        )
+    })??;
+    tracing::info!(
+        "program {}: {} lines of {}",
+        program.job_id,
+        program.line_count,
+        program.dialect
+    );
+
+    let t1 = Instant::now();
+    let goal = ExecuteProgramGoal {
+        program: program.clone(),
+        machine_id: p.machine_id.clone(),
+        start_line: 0,
+    };
+    let (_, run) = follow(&run_client, goal, "execute_program", timeout, |f| {
+        format!(
+            "line {}/{} ({:.0} %)",
+            f.acked_line, f.total_lines, f.percent_done
+        )
+    })
+    .await?;
+    let summary = JobSummary {
+        iterations: last_iteration.load(std::sync::atomic::Ordering::Relaxed),
+        plan,
+        plan_time,
+        program,
+        run,
+        run_time: t1.elapsed(),
+    };
+    Ok(summary)
+}
+
+/// Runs the job, prints the summary, and returns an error unless the program ran to its end.
+///
+/// # Errors
+/// As [`run_job`]; a program that did not finish.
+pub async fn run(node: CellNode, p: RunnerParams) -> anyhow::Result<()> {
+    let summary = run_job(&node, &p).await?;
+    println!("{summary}");
+    if !summary.run.success {
+        bail!("execute_program: {}", summary.run.message);
+    }
+    Ok(())
+}
+
+/// The `job_runner` binary (also `cell node job_runner`).
+pub fn main(argv: Vec<String>) -> std::process::ExitCode {
+    cell_runtime::run_node("job_runner", argv, run)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_params_file_parses_and_matches_the_defaults() {
+        let mut sources = cell_runtime::params::ParamSources::default();
+        let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/job_runner.yaml");
+        sources
+            .merge_file(std::path::Path::new(file), "/", "job_runner")
+            .unwrap();
+        let p: RunnerParams = sources.parse().unwrap();
+        assert_eq!(p, RunnerParams::default());
+    }
+}
