@@ -18,52 +18,15 @@ fn peer_script() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/interop/ros_peer.py")
 }
 
-/// The Python that runs the Cyclone peer: `CELL_TEST_PYTHON` if set, else a virtualenv under
-/// the target directory, created and filled from `tests/interop/requirements.txt` (PyPI) on
-/// first use, so `cargo test` needs no manual set-up.
+/// The Python that runs the Cyclone peer (see [`common::venv_python`]).
 fn python() -> String {
-    if let Ok(python) = std::env::var("CELL_TEST_PYTHON") {
-        return python;
-    }
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("interop-venv");
-    let python = venv.join("bin/python");
-    let has_peer = |python: &std::path::Path| {
-        std::process::Command::new(python)
-            .args(["-c", "import cyclonedds"])
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    if !has_peer(&python) {
-        let requirements =
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/interop/requirements.txt");
-        let run = |cmd: &mut std::process::Command| {
-            let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
-            assert!(
-                out.status.success(),
-                "{cmd:?} failed: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        };
-        run(std::process::Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&venv));
-        run(std::process::Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-                "-r",
-            ])
-            .arg(&requirements));
-        assert!(
-            has_peer(&python),
-            "{} cannot import cyclonedds after installing it",
-            python.display()
-        );
-    }
-    python.display().to_string()
+    common::venv_python(
+        "interop-venv",
+        "tests/interop/requirements.txt",
+        "cyclonedds",
+    )
+    .display()
+    .to_string()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

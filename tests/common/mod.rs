@@ -84,3 +84,51 @@ where
         result,
     })
 }
+
+/// A Python with `requirements` installed: `CELL_TEST_PYTHON` if set, else a virtualenv
+/// `CARGO_TARGET_TMPDIR/<name>` created and filled from PyPI on first use (when `import` fails
+/// in it), so `cargo test` needs no manual set-up.
+pub fn venv_python(name: &str, requirements: &str, import: &str) -> std::path::PathBuf {
+    use std::path::PathBuf;
+    use std::process::Command;
+    if let Ok(python) = std::env::var("CELL_TEST_PYTHON") {
+        return PathBuf::from(python);
+    }
+    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let python = venv.join("bin/python");
+    let ready = |python: &std::path::Path| {
+        Command::new(python)
+            .args(["-c", &format!("import {import}")])
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if !ready(&python) {
+        let requirements = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(requirements);
+        let run = |cmd: &mut Command| {
+            let out = cmd.output().unwrap_or_else(|e| panic!("{cmd:?}: {e}"));
+            assert!(
+                out.status.success(),
+                "{cmd:?} failed: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        };
+        run(Command::new("python3").args(["-m", "venv"]).arg(&venv));
+        run(Command::new(&python)
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+                "-r",
+            ])
+            .arg(&requirements));
+        assert!(
+            ready(&python),
+            "{} cannot import {import} after installing {}",
+            python.display(),
+            requirements.display()
+        );
+    }
+    python
+}

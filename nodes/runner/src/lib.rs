@@ -20,6 +20,9 @@ use cell_runtime::{CellNode, QosPreset};
 use futures::StreamExt;
 use serde::{Deserialize, Serialize};
 
+/// The Rerun entity each job's summary rows go to.
+pub const RERUN_LOG: &str = "/jobs/log";
+
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -295,7 +298,19 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
 /// # Errors
 /// As [`run_job`]; a program that did not finish.
 pub async fn run(node: CellNode, p: RunnerParams) -> anyhow::Result<()> {
-    let summary = run_job(&node, &p).await?;
+    let sink = node.rerun();
+    sink.set_time(&cell_msgs::builtin_interfaces::Time::now(), 0);
+    let summary = match run_job(&node, &p).await {
+        Ok(s) => s,
+        Err(e) => {
+            sink.log_text(RERUN_LOG, &format!("{}: {e:#}", p.job_id));
+            return Err(e);
+        }
+    };
+    sink.set_time(&cell_msgs::builtin_interfaces::Time::now(), 1);
+    for line in summary.to_string().lines().skip(2) {
+        sink.log_text(RERUN_LOG, &format!("{}: {line}", p.job_id));
+    }
     println!("{summary}");
     if !summary.run.success {
         bail!("execute_program: {}", summary.run.message);

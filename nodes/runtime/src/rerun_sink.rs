@@ -19,6 +19,8 @@
 //! | `/machine/<id>/position`       | machine position now (tool and, on 4-axis machines, second carriage) | machine_bridge |
 //! | `/machine/<id>/trace/<n>`      | the path the machine has moved, in chunks | machine_bridge |
 //! | `/machine/<id>/{buffer_fill,feed_mm_s,acked_line}` | scalars over time | machine_bridge |
+//! | `/machine/log`                 | each program run's outcome and each operator command | machine_bridge |
+//! | `/jobs/log`                    | each job's summary rows                 | job_runner       |
 //! | `/monitor/<topic>`             | whatever the monitor node received      | monitor          |
 //!
 //! [`toolpath_entity`] gives the default path for a `Toolpath` by its process. Timelines:
