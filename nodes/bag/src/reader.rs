@@ -88,12 +88,12 @@ impl BagInfo {
     }
 }
 
-/// The files of a bag, in split order: from `metadata.yaml` if present, else every
-/// `*_N.mcap` ordered by `N`, else every `*.mcap` by name.
+/// The files of a bag, in split order: those `metadata.yaml` lists, then any other `*.mcap`
+/// (see [`mcap_files_in`]).
 pub(crate) fn bag_files(dir: &Path) -> Result<Vec<PathBuf>> {
     if dir.join(metadata::FILE_NAME).exists() {
         let meta = MetadataFile::read(dir)?;
-        let files: Vec<PathBuf> = meta
+        let mut files: Vec<PathBuf> = meta
             .rosbag2_bagfile_information
             .relative_file_paths
             .iter()
@@ -104,6 +104,13 @@ pub(crate) fn bag_files(dir: &Path) -> Result<Vec<PathBuf>> {
                 path: dir.join(metadata::FILE_NAME),
                 reason: format!("lists {}, which does not exist", missing.display()),
             });
+        }
+        // Files the metadata does not list yet (opened after it was last written, e.g. by a
+        // writer that was killed) are part of the bag too.
+        for p in mcap_files_in(dir)? {
+            if !files.contains(&p) {
+                files.push(p);
+            }
         }
         return Ok(files);
     }
