@@ -8,7 +8,7 @@
 //!   ([`cell_msgs::RosMessage`]); see [`writer`] for the MCAP layout and the crash-safety design.
 //! - [`BagInfo`] summarises a bag (what `ros2 bag info` prints, via `Display`) and
 //!   [`BagReader`] iterates its messages in log-time order across split files.
-//! - [`repair`] makes a bag whose writer was killed readable again.
+//! - [`repair()`] makes a bag whose writer was killed readable again.
 //!
 //! Every error names the file it concerns, and the byte offset when one is known; corrupt or
 //! truncated input is an error, never a panic.

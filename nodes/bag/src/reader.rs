@@ -4,7 +4,7 @@
 //! A bag is a directory (its files from `metadata.yaml`, else every `*_N.mcap` in split order)
 //! or a single `.mcap`. Everything is taken from each file's summary section, so opening a bag
 //! reads only footers and indexes; a file without one (a killed writer) is refused with an
-//! error that says to run [`crate::repair`]. Only chunked files are read (rosbag2 and this
+//! error that says to run [`crate::repair()`]. Only chunked files are read (rosbag2 and this
 //! crate always chunk).
 //!
 //! Messages are merged across files and chunks by log time: chunks are loaded in order of
@@ -323,7 +323,10 @@ impl BagReader {
         if offset.checked_add(length).is_none_or(|end| end > f.len) || length < 9 {
             return Err(corrupt(
                 offset,
-                format!("chunk index points past the end of the file ({} bytes)", f.len),
+                format!(
+                    "chunk index points past the end of the file ({} bytes)",
+                    f.len
+                ),
             ));
         }
         let mut buf = vec![0; length as usize];
@@ -341,7 +344,10 @@ impl BagReader {
             .filter(|fr| fr.op == op::CHUNK && scan::framed_len(fr) == buf.len())
             .ok_or_else(|| corrupt(offset, "chunk index does not point at a chunk".into()))?;
         let Item::Chunk { header, data } = scan::parse(&framed).map_err(scan_err)? else {
-            return Err(corrupt(offset, "chunk index does not point at a chunk".into()));
+            return Err(corrupt(
+                offset,
+                "chunk index does not point at a chunk".into(),
+            ));
         };
         let records = scan::decompress(&header, data, offset).map_err(scan_err)?;
         let mut out = Vec::new();
@@ -350,7 +356,10 @@ impl BagReader {
                 let channel = f.channels.get(&header.channel_id).ok_or_else(|| {
                     corrupt(
                         offset,
-                        format!("message on channel {} missing from the summary", header.channel_id),
+                        format!(
+                            "message on channel {} missing from the summary",
+                            header.channel_id
+                        ),
                     )
                 })?;
                 out.push(BagMessage {
@@ -370,10 +379,7 @@ impl BagReader {
 /// Opens a file and reads its summary section: (file and its length, summary).
 pub(crate) fn open_summary(path: &Path) -> Result<((File, u64), mcap::Summary)> {
     let mut file = File::open(path).map_err(|e| BagError::io(path, e))?;
-    let len = file
-        .metadata()
-        .map_err(|e| BagError::io(path, e))?
-        .len();
+    let len = file.metadata().map_err(|e| BagError::io(path, e))?.len();
     let mut head = [0u8; 8];
     let mut tail = [0u8; 8];
     let head_ok = file.read_exact(&mut head).is_ok() && head == MAGIC;
@@ -462,11 +468,7 @@ impl Iterator for Messages<'_> {
             return None;
         }
         while let Some(chunk) = self.reader.chunks.get(self.next_chunk) {
-            if self
-                .heap
-                .peek()
-                .is_some_and(|top| top.0 < chunk.start_time)
-            {
+            if self.heap.peek().is_some_and(|top| top.0 < chunk.start_time) {
                 break;
             }
             match self.reader.load_chunk(self.next_chunk) {
@@ -581,7 +583,10 @@ mod tests {
             format_time(1_700_000_000_123_456_789),
             "Nov 14 2023 22:13:20.123456789 (1700000000.123456789)"
         );
-        assert_eq!(format_time(0), "Jan  1 1970 00:00:00.000000000 (0.000000000)");
+        assert_eq!(
+            format_time(0),
+            "Jan  1 1970 00:00:00.000000000 (0.000000000)"
+        );
         assert_eq!(human_size(512), "512 B");
         assert_eq!(human_size(3 * 1024 * 1024 / 2), "1.50 MiB");
     }

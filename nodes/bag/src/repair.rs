@@ -79,7 +79,11 @@ pub fn repair(path: impl AsRef<Path>) -> Result<RepairReport> {
     for p in reader::mcap_files_in(&dir)? {
         let reader = BagReader::open(&p)?;
         let info = reader.info();
-        let name = p.file_name().unwrap_or_default().to_string_lossy().into_owned();
+        let name = p
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
         let mut stats = FileStats::new(name);
         stats.message_count = info.message_count;
         stats.start = info.time_range.map(|r| r.0);
@@ -118,7 +122,9 @@ fn repair_file(path: &Path) -> Result<FileRepair> {
     }
     let bytes = std::fs::read(path).map_err(|e| BagError::io(path, e))?;
     // A file killed before its magic was complete holds nothing: it becomes an empty MCAP.
-    if bytes.len() < MAGIC.len() && bytes[..] != MAGIC[..bytes.len()] || bytes.len() >= MAGIC.len() && bytes[..8] != MAGIC {
+    if bytes.len() < MAGIC.len() && bytes[..] != MAGIC[..bytes.len()]
+        || bytes.len() >= MAGIC.len() && bytes[..8] != MAGIC
+    {
         return Err(BagError::Corrupt {
             path: path.to_owned(),
             offset: 0,
@@ -132,7 +138,8 @@ fn repair_file(path: &Path) -> Result<FileRepair> {
     // The header comes first; keep its profile.
     if let Ok(Some(framed)) = scan::frame_at(&bytes, pos, 0) {
         if framed.op == mcap::records::op::HEADER {
-            if let Ok(mcap::records::Record::Header(h)) = mcap::parse_record(framed.op, framed.body) {
+            if let Ok(mcap::records::Record::Header(h)) = mcap::parse_record(framed.op, framed.body)
+            {
                 profile = h.profile;
             }
             pos += scan::framed_len(&framed);
@@ -174,7 +181,13 @@ fn repair_file(path: &Path) -> Result<FileRepair> {
             other => vec![other],
         };
         // A chunk's content is only used once the whole chunk has checked out.
-        if let Err(reason) = copy_items(items, &mut schemas, &mut channels, &mut writer, &mut messages) {
+        if let Err(reason) = copy_items(
+            items,
+            &mut schemas,
+            &mut channels,
+            &mut writer,
+            &mut messages,
+        ) {
             break (framed.offset, reason);
         }
         pos += scan::framed_len(&framed);
@@ -182,7 +195,9 @@ fn repair_file(path: &Path) -> Result<FileRepair> {
     writer.finish().map_err(|e| BagError::mcap(&tmp, e))?;
     let mut sink = writer.into_inner();
     sink.flush().map_err(|e| BagError::io(&tmp, e))?;
-    sink.get_ref().sync_all().map_err(|e| BagError::io(&tmp, e))?;
+    sink.get_ref()
+        .sync_all()
+        .map_err(|e| BagError::io(&tmp, e))?;
     drop(sink);
     let original = free_name(&sibling(path, ".orig"));
     if std::fs::hard_link(path, &original).is_err() {
@@ -208,7 +223,12 @@ fn copy_items<W: Write + std::io::Seek>(
 ) -> std::result::Result<(), String> {
     for item in items {
         match item {
-            Item::Schema { id, name, encoding, data } => {
+            Item::Schema {
+                id,
+                name,
+                encoding,
+                data,
+            } => {
                 schemas.insert(
                     id,
                     Arc::new(mcap::Schema {
@@ -222,10 +242,12 @@ fn copy_items<W: Write + std::io::Seek>(
             Item::Channel(c) => {
                 let schema = match c.schema_id {
                     0 => None,
-                    id => Some(schemas.get(&id).cloned().ok_or(format!(
-                        "channel {} uses unknown schema {id}",
-                        c.id
-                    ))?),
+                    id => Some(
+                        schemas
+                            .get(&id)
+                            .cloned()
+                            .ok_or(format!("channel {} uses unknown schema {id}", c.id))?,
+                    ),
                 };
                 channels.insert(
                     c.id,

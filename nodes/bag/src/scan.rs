@@ -113,9 +113,8 @@ pub(crate) fn parse<'a>(f: &Framed<'a>) -> Result<Item<'a>, ScanError> {
             _ => Item::Other,
         });
     }
-    let record = mcap::parse_record(f.op, f.body).map_err(|e| {
-        ScanError::corrupt(f.offset, format!("record opcode {:#04x}: {e}", f.op))
-    })?;
+    let record = mcap::parse_record(f.op, f.body)
+        .map_err(|e| ScanError::corrupt(f.offset, format!("record opcode {:#04x}: {e}", f.op)))?;
     Ok(match record {
         Record::Schema { header, data } => Item::Schema {
             id: header.id,
@@ -146,7 +145,11 @@ fn borrowed<'a>(data: std::borrow::Cow<'_, [u8]>, f: &Framed<'a>) -> Result<&'a 
 }
 
 /// Decompresses and checks a chunk; `offset` is the chunk record's file offset (for errors).
-pub(crate) fn decompress(header: &ChunkHeader, data: &[u8], offset: u64) -> Result<Vec<u8>, ScanError> {
+pub(crate) fn decompress(
+    header: &ChunkHeader,
+    data: &[u8],
+    offset: u64,
+) -> Result<Vec<u8>, ScanError> {
     let size = header.uncompressed_size;
     let out = match header.compression.as_str() {
         "" => data.to_vec(),

@@ -10,7 +10,7 @@
 //!
 //! Crash safety: chunks are built in memory (`mcap`'s no-seek mode) and written whole, then the
 //! file buffer is flushed to the kernel. A writer killed at any point (SIGKILL included) thus
-//! leaves complete chunks plus at most one partial record at the end; [`crate::repair`] drops
+//! leaves complete chunks plus at most one partial record at the end; [`crate::repair()`] drops
 //! that tail and adds the summary. A chunk is closed when its uncompressed size reaches
 //! [`BagWriterOptions::chunk_size`] or when it spans [`BagWriterOptions::max_chunk_duration`] of
 //! log time, which bounds what a crash can lose on slow topics.
@@ -340,9 +340,7 @@ impl BagWriter {
             .max_file_size
             .is_some_and(|max| file.written.load(Ordering::Relaxed) >= max);
         let duration = match (self.options.max_file_duration, file.stats.start) {
-            (Some(max), Some(start)) => {
-                log_time_ns.saturating_sub(start) >= max.as_nanos() as u64
-            }
+            (Some(max), Some(start)) => log_time_ns.saturating_sub(start) >= max.as_nanos() as u64,
             _ => false,
         };
         if size || duration {
@@ -454,6 +452,9 @@ mod tests {
     #[test]
     fn split_names_are_rosbag2s() {
         assert_eq!(split_file_name("run", 0), "run_0.mcap");
-        assert_eq!(split_file_name("rosbag2_2026_11_22", 12), "rosbag2_2026_11_22_12.mcap");
+        assert_eq!(
+            split_file_name("rosbag2_2026_11_22", 12),
+            "rosbag2_2026_11_22_12.mcap"
+        );
     }
 }

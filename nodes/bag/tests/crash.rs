@@ -40,7 +40,7 @@ fn crash_child() {
     for i in 0.. {
         w.write("/machine_status", &status(i), 1_000_000_000 + i * 1_000_000)
             .unwrap();
-        if i % 50 == 0 {
+        if i.is_multiple_of(50) {
             std::thread::sleep(Duration::from_millis(2));
         }
     }
@@ -75,7 +75,11 @@ fn sigkill_mid_write_then_repair() {
     let repaired: Vec<_> = report.repaired().collect();
     assert_eq!(repaired.len(), 1, "{report:?}");
     assert!(repaired[0].original.as_ref().unwrap().exists());
-    let files: Vec<_> = report.files.iter().map(|f| f.path.file_name().unwrap().to_owned()).collect();
+    let files: Vec<_> = report
+        .files
+        .iter()
+        .map(|f| f.path.file_name().unwrap().to_owned())
+        .collect();
     assert!(files.len() >= 3, "{files:?}");
 
     // Everything up to the last complete chunk is there, in order, with no gaps.
@@ -86,12 +90,17 @@ fn sigkill_mid_write_then_repair() {
     for m in reader.messages() {
         let m = m.unwrap();
         let s: MachineStatus = m.decode().unwrap();
-        assert_eq!(s.acked_line as u64, n, "messages are contiguous from the start");
+        assert_eq!(
+            s.acked_line as u64, n,
+            "messages are contiguous from the start"
+        );
         assert_eq!(m.log_time_ns, 1_000_000_000 + n * 1_000_000);
         n += 1;
     }
     assert_eq!(n, total);
-    let meta = cell_bag::MetadataFile::read(&bag).unwrap().rosbag2_bagfile_information;
+    let meta = cell_bag::MetadataFile::read(&bag)
+        .unwrap()
+        .rosbag2_bagfile_information;
     assert_eq!(meta.message_count, total);
     assert_eq!(meta.relative_file_paths.len(), files.len());
 
@@ -101,7 +110,11 @@ fn sigkill_mid_write_then_repair() {
     // And the third-party readers read the repaired bag.
     let lines = common::third_party_read(&bag);
     for reader in ["mcap", "rosbags"] {
-        assert_eq!(lines.iter().filter(|l| l["reader"] == reader).count() as u64, total, "{reader}");
+        assert_eq!(
+            lines.iter().filter(|l| l["reader"] == reader).count() as u64,
+            total,
+            "{reader}"
+        );
     }
 }
 
@@ -109,12 +122,16 @@ fn sigkill_mid_write_then_repair() {
 fn small_bag() -> (tempfile::TempDir, Vec<u8>) {
     let tmp = tempfile::tempdir().unwrap();
     let bag = tmp.path().join("small");
-    let options = BagWriterOptions { chunk_size: 512, ..Default::default() };
+    let options = BagWriterOptions {
+        chunk_size: 512,
+        ..Default::default()
+    };
     let mut w = BagWriter::create(&bag, options).unwrap();
     for i in 0..40 {
         w.write("/machine_status", &status(i), 1_000 + i).unwrap();
     }
-    w.write("/cell/toolpath", &common::toolpath("j"), 5_000).unwrap();
+    w.write("/cell/toolpath", &common::toolpath("j"), 5_000)
+        .unwrap();
     w.finish().unwrap();
     let bytes = std::fs::read(bag.join("small_0.mcap")).unwrap();
     (tmp, bytes)
@@ -136,7 +153,18 @@ fn truncated_files_are_errors_naming_the_file_and_repairable() {
     let (tmp, bytes) = small_bag();
     let file = tmp.path().join("cut.mcap");
     let len = bytes.len();
-    for cut in [0, 3, 8, 20, len / 4, len / 2, len - 200, len - 30, len - 9, len - 1] {
+    for cut in [
+        0,
+        3,
+        8,
+        20,
+        len / 4,
+        len / 2,
+        len - 200,
+        len - 30,
+        len - 9,
+        len - 1,
+    ] {
         std::fs::write(&file, &bytes[..cut]).unwrap();
         let err = read_all(&file).unwrap_err();
         assert!(err.contains("cut.mcap"), "cut at {cut}: {err}");
@@ -146,7 +174,10 @@ fn truncated_files_are_errors_naming_the_file_and_repairable() {
                 let got = read_all(&file).unwrap();
                 assert_eq!(got as u64, report.files[0].messages, "cut at {cut}");
             }
-            Err(e) => assert!(cut < 8 && cut > 0 || e.to_string().contains("cut.mcap"), "cut at {cut}: {e}"),
+            Err(e) => assert!(
+                cut < 8 && cut > 0 || e.to_string().contains("cut.mcap"),
+                "cut at {cut}: {e}"
+            ),
         }
         for extra in std::fs::read_dir(tmp.path()).unwrap() {
             let p = extra.unwrap().path();

@@ -34,14 +34,32 @@ type Expected = Vec<(String, String, u64, Value)>;
 fn write_cell_bag(dir: &std::path::Path, options: BagWriterOptions) -> Expected {
     let mut w = BagWriter::create(dir, options).unwrap();
     let mut expected = Expected::new();
-    w.add_topic("/cell/toolpath", Toolpath::ROS_NAME, &[QosProfile::reliable_transient_local(16)])
-        .unwrap();
-    w.add_topic("/cell/heat_map", HeatMap::ROS_NAME, &[QosProfile::best_effort(1)]).unwrap();
-    w.add_topic("/machine_status", MachineStatus::ROS_NAME, &[QosProfile::reliable_volatile(32)])
-        .unwrap();
+    w.add_topic(
+        "/cell/toolpath",
+        Toolpath::ROS_NAME,
+        &[QosProfile::reliable_transient_local(16)],
+    )
+    .unwrap();
+    w.add_topic(
+        "/cell/heat_map",
+        HeatMap::ROS_NAME,
+        &[QosProfile::best_effort(1)],
+    )
+    .unwrap();
+    w.add_topic(
+        "/machine_status",
+        MachineStatus::ROS_NAME,
+        &[QosProfile::reliable_volatile(32)],
+    )
+    .unwrap();
     let tp = toolpath("job-42");
     w.write("/cell/toolpath", &tp, T0).unwrap();
-    expected.push(("/cell/toolpath".into(), Toolpath::ROS_NAME.into(), T0, serde_json::to_value(&tp).unwrap()));
+    expected.push((
+        "/cell/toolpath".into(),
+        Toolpath::ROS_NAME.into(),
+        T0,
+        serde_json::to_value(&tp).unwrap(),
+    ));
     for i in 0..30u64 {
         let t = T0 + (i + 1) * 100_000_000;
         let status = MachineStatus {
@@ -53,7 +71,12 @@ fn write_cell_bag(dir: &std::path::Path, options: BagWriterOptions) -> Expected 
             ..Default::default()
         };
         w.write("/machine_status", &status, t).unwrap();
-        expected.push(("/machine_status".into(), MachineStatus::ROS_NAME.into(), t, serde_json::to_value(&status).unwrap()));
+        expected.push((
+            "/machine_status".into(),
+            MachineStatus::ROS_NAME.into(),
+            t,
+            serde_json::to_value(&status).unwrap(),
+        ));
         if i % 10 == 5 {
             let map = HeatMap {
                 width: 64,
@@ -65,7 +88,12 @@ fn write_cell_bag(dir: &std::path::Path, options: BagWriterOptions) -> Expected 
                 ..Default::default()
             };
             w.write("/cell/heat_map", &map, t + 1).unwrap();
-            expected.push(("/cell/heat_map".into(), HeatMap::ROS_NAME.into(), t + 1, serde_json::to_value(&map).unwrap()));
+            expected.push((
+                "/cell/heat_map".into(),
+                HeatMap::ROS_NAME.into(),
+                t + 1,
+                serde_json::to_value(&map).unwrap(),
+            ));
         }
     }
     for (k, write) in for_each_message!(writers).into_iter().enumerate() {
@@ -86,7 +114,10 @@ fn check_ours(bag: &std::path::Path, expected: &Expected) {
     want.sort_by_key(|e| e.2);
     assert_eq!(got.len(), want.len());
     for (m, (topic, ty, t, value)) in got.iter().zip(&want) {
-        assert_eq!((&*m.topic, &*m.type_name, m.log_time_ns), (topic.as_str(), ty.as_str(), *t));
+        assert_eq!(
+            (&*m.topic, &*m.type_name, m.log_time_ns),
+            (topic.as_str(), ty.as_str(), *t)
+        );
         let decoded = cell_msgs::dynamic::decode(ty, &m.data).unwrap();
         assert_eq!(&decoded, value, "{topic}");
     }
@@ -111,7 +142,10 @@ fn check_third_party(bag: &std::path::Path, expected: &Expected) -> Vec<Value> {
     }
     // AnyReader misfiles service parts (`pkg/srv/msg/Name_Request`); only those need the
     // checker's own typestore.
-    let own_only = lines.iter().find(|l| l["reader"] == "rosbags-own-store-only").unwrap();
+    let own_only = lines
+        .iter()
+        .find(|l| l["reader"] == "rosbags-own-store-only")
+        .unwrap();
     for ty in own_only["types"].as_array().unwrap() {
         assert!(ty.as_str().unwrap().contains("/srv/"), "{ty}");
     }
@@ -128,14 +162,24 @@ fn third_party_readers_decode_every_field() {
 
     // Spot checks in the readers' own terms, beyond the whole-value comparison.
     let by = |reader: &str, topic: &str| -> Vec<Value> {
-        lines.iter().filter(|l| l["reader"] == reader && l["topic"] == topic).map(|l| l["value"].clone()).collect()
+        lines
+            .iter()
+            .filter(|l| l["reader"] == reader && l["topic"] == topic)
+            .map(|l| l["value"].clone())
+            .collect()
     };
     for reader in ["mcap", "rosbags"] {
         let tp = &by(reader, "/cell/toolpath")[0];
         assert_eq!(tp["job_id"], "job-42");
-        assert_eq!(tp["segments"][0]["points"][1], json!({"x": 100.0, "y": 42.125, "z": 3.0}));
+        assert_eq!(
+            tp["segments"][0]["points"][1],
+            json!({"x": 100.0, "y": 42.125, "z": 3.0})
+        );
         let hm = &by(reader, "/cell/heat_map")[0];
-        assert_eq!((hm["width"].as_u64(), hm["height"].as_u64()), (Some(64), Some(48)));
+        assert_eq!(
+            (hm["width"].as_u64(), hm["height"].as_u64()),
+            (Some(64), Some(48))
+        );
         assert_eq!(hm["data"].as_array().unwrap().len(), 64 * 48);
         let st = by(reader, "/machine_status");
         assert_eq!(st.len(), 30);
@@ -148,17 +192,41 @@ fn third_party_readers_decode_every_field() {
     assert_eq!(file["compression"], json!(["zstd"]));
     assert_eq!(file["message_indexes"], true);
     let channels = file["channels"].as_array().unwrap();
-    let tp = channels.iter().find(|c| c["topic"] == "/cell/toolpath").unwrap();
-    assert_eq!((tp["encoding"].as_str(), tp["schema"].as_str(), tp["schema_encoding"].as_str()),
-        (Some("cdr"), Some("cell_msgs/msg/Toolpath"), Some("ros2msg")));
+    let tp = channels
+        .iter()
+        .find(|c| c["topic"] == "/cell/toolpath")
+        .unwrap();
+    assert_eq!(
+        (
+            tp["encoding"].as_str(),
+            tp["schema"].as_str(),
+            tp["schema_encoding"].as_str()
+        ),
+        (Some("cdr"), Some("cell_msgs/msg/Toolpath"), Some("ros2msg"))
+    );
     let bag_info = lines.iter().find(|l| l["reader"] == "rosbags-bag").unwrap();
     assert_eq!(bag_info["message_count"], expected.len());
     let qos = |topic: &str| {
-        bag_info["topics"].as_array().unwrap().iter().find(|t| t["topic"] == topic).unwrap()["qos"][0].clone()
+        bag_info["topics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["topic"] == topic)
+            .unwrap()["qos"][0]
+            .clone()
     };
-    assert_eq!(qos("/cell/toolpath"), json!({"reliability": "RELIABLE", "durability": "TRANSIENT_LOCAL", "history": "KEEP_LAST", "depth": 16}));
-    assert_eq!(qos("/cell/heat_map"), json!({"reliability": "BEST_EFFORT", "durability": "VOLATILE", "history": "KEEP_LAST", "depth": 1}));
-    assert_eq!(qos("/machine_status"), json!({"reliability": "RELIABLE", "durability": "VOLATILE", "history": "KEEP_LAST", "depth": 32}));
+    assert_eq!(
+        qos("/cell/toolpath"),
+        json!({"reliability": "RELIABLE", "durability": "TRANSIENT_LOCAL", "history": "KEEP_LAST", "depth": 16})
+    );
+    assert_eq!(
+        qos("/cell/heat_map"),
+        json!({"reliability": "BEST_EFFORT", "durability": "VOLATILE", "history": "KEEP_LAST", "depth": 1})
+    );
+    assert_eq!(
+        qos("/machine_status"),
+        json!({"reliability": "RELIABLE", "durability": "VOLATILE", "history": "KEEP_LAST", "depth": 32})
+    );
 }
 
 #[test]
@@ -172,10 +240,85 @@ fn split_bags_are_read_across_files() {
     };
     let expected = write_cell_bag(&bag, options);
     let info = BagInfo::open(&bag).unwrap();
-    let names: Vec<String> = info.files.iter().map(|f| f.path.file_name().unwrap().to_string_lossy().into()).collect();
-    assert_eq!(names, ["split_run_0.mcap", "split_run_1.mcap", "split_run_2.mcap", "split_run_3.mcap"]);
-    assert_eq!(info.files.iter().map(|f| f.message_count).sum::<u64>(), expected.len() as u64);
+    let names: Vec<String> = info
+        .files
+        .iter()
+        .map(|f| f.path.file_name().unwrap().to_string_lossy().into())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "split_run_0.mcap",
+            "split_run_1.mcap",
+            "split_run_2.mcap",
+            "split_run_3.mcap"
+        ]
+    );
+    assert_eq!(
+        info.files.iter().map(|f| f.message_count).sum::<u64>(),
+        expected.len() as u64
+    );
     check_ours(&bag, &expected);
     let lines = check_third_party(&bag, &expected);
-    assert_eq!(lines.iter().filter(|l| l["reader"] == "mcap-file").count(), 4);
+    assert_eq!(
+        lines.iter().filter(|l| l["reader"] == "mcap-file").count(),
+        4
+    );
+}
+
+#[test]
+fn metadata_yaml_and_info_display() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bag = tmp.path().join("meta_run");
+    let expected = write_cell_bag(&bag, BagWriterOptions::default());
+    let text = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
+    assert!(
+        text.starts_with(
+            "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
+        ),
+        "{text}"
+    );
+    let meta = cell_bag::MetadataFile::read(&bag)
+        .unwrap()
+        .rosbag2_bagfile_information;
+    let last = expected.iter().map(|e| e.2).max().unwrap();
+    assert_eq!(meta.message_count, expected.len() as u64);
+    assert_eq!(meta.starting_time.nanoseconds_since_epoch, T0);
+    assert_eq!(meta.duration.nanoseconds, last - T0);
+    assert_eq!(meta.relative_file_paths, ["meta_run_0.mcap"]);
+    assert_eq!(meta.files[0].path, "meta_run_0.mcap");
+    assert_eq!(meta.files[0].message_count, expected.len() as u64);
+    assert_eq!(
+        (
+            meta.compression_format.as_str(),
+            meta.compression_mode.as_str()
+        ),
+        ("", "")
+    );
+    let tp = &meta.topics_with_message_count[0];
+    assert_eq!(
+        (
+            tp.topic_metadata.name.as_str(),
+            tp.topic_metadata.type_name.as_str()
+        ),
+        ("/cell/toolpath", "cell_msgs/msg/Toolpath")
+    );
+    assert_eq!(tp.topic_metadata.serialization_format, "cdr");
+    assert_eq!(tp.message_count, 1);
+    assert_eq!(
+        cell_bag::qos::from_yaml(&tp.topic_metadata.offered_qos_profiles).unwrap(),
+        [Some(QosProfile::reliable_transient_local(16))]
+    );
+
+    let info = BagInfo::open(&bag).unwrap().to_string();
+    assert!(
+        info.starts_with("Files:             meta_run_0.mcap\nBag size:          "),
+        "{info}"
+    );
+    assert!(info.contains("Storage id:        mcap\n"), "{info}");
+    assert!(
+        info.contains(&format!("Messages:          {}\n", expected.len())),
+        "{info}"
+    );
+    assert!(info.contains("Topic information: Topic: /cell/toolpath | Type: cell_msgs/msg/Toolpath | Count: 1 | Serialization Format: cdr\n"), "{info}");
 }

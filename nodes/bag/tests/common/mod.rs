@@ -44,7 +44,7 @@ fn single(base: &BaseType, n: &mut u64) -> Value {
     *n += 1;
     let (i, f) = (*n as i64, *n as f64);
     match prim {
-        Bool => json!(*n % 2 == 0),
+        Bool => json!(n.is_multiple_of(2)),
         Byte | Char | Uint8 => json!(*n % 250 + 1),
         Int8 => json!(-(i % 120) - 1),
         Uint16 => json!(1_000 + *n),
@@ -64,12 +64,23 @@ fn single(base: &BaseType, n: &mut u64) -> Value {
 
 /// A toolpath with known values the tests check field by field.
 pub fn toolpath(job: &str) -> cell_msgs::Toolpath {
-    let mut tp: cell_msgs::Toolpath =
-        serde_json::from_value(sample(<cell_msgs::Toolpath as cell_msgs::RosMessage>::ROS_NAME, 7)).unwrap();
+    let mut tp: cell_msgs::Toolpath = serde_json::from_value(sample(
+        <cell_msgs::Toolpath as cell_msgs::RosMessage>::ROS_NAME,
+        7,
+    ))
+    .unwrap();
     tp.job_id = job.into();
     tp.segments[0].points = vec![
-        Point { x: 1.5, y: -2.25, z: 0.0 },
-        Point { x: 100.0, y: 42.125, z: 3.0 },
+        Point {
+            x: 1.5,
+            y: -2.25,
+            z: 0.0,
+        },
+        Point {
+            x: 100.0,
+            y: 42.125,
+            z: 3.0,
+        },
     ];
     tp
 }
@@ -101,12 +112,25 @@ pub fn python() -> String {
                 String::from_utf8_lossy(&out.stderr)
             );
         };
-        run(std::process::Command::new("python3").args(["-m", "venv"]).arg(&venv));
+        run(std::process::Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&venv));
         run(std::process::Command::new(&python)
-            .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+                "-r",
+            ])
             .arg(&requirements));
         std::fs::write(&stamp, &wanted).expect("stamp");
-        assert!(ready(&python), "{} cannot import the bag readers", python.display());
+        assert!(
+            ready(&python),
+            "{} cannot import the bag readers",
+            python.display()
+        );
     }
     python.display().to_string()
 }
