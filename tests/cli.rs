@@ -377,3 +377,73 @@ fn ros_domain_id_separates_cells() {
     );
     assert!(text(&out.stdout).contains("1 toolpath(s)"));
 }
+
+#[test]
+fn bag_info_lists_topics_and_a_cut_bag_is_named_then_repaired() {
+    use cell_bag::{BagWriter, BagWriterOptions};
+    use cell_msgs::MachineStatus;
+    let dir = tempfile::tempdir().unwrap();
+    let bag = dir.path().join("run1");
+    {
+        // Small chunks, so a cut file still holds complete ones.
+        let options = BagWriterOptions {
+            chunk_size: 2048,
+            ..BagWriterOptions::default()
+        };
+        let mut writer = BagWriter::create(&bag, options).unwrap();
+        for i in 0..300u32 {
+            let status = MachineStatus {
+                machine_id: "grbl-sim".into(),
+                state: MachineStatus::STATE_RUNNING,
+                acked_line: i,
+                ..MachineStatus::default()
+            };
+            writer
+                .write(
+                    "/cell/machine_status",
+                    &status,
+                    1_000_000_000 + u64::from(i) * 100_000_000,
+                )
+                .unwrap();
+        }
+        writer.finish().unwrap();
+    }
+    let domain = common::fresh_domain();
+    let out = cell(&["bag", "info", bag.to_str().unwrap()], domain);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(stdout.contains("/cell/machine_status"), "{stdout}");
+    assert!(stdout.contains("cell_msgs/msg/MachineStatus"), "{stdout}");
+    assert!(stdout.contains("300"), "{stdout}");
+
+    // Cut the file as a killed recorder would leave it: no summary, a torn last record.
+    let mcap = std::fs::read_dir(&bag)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|x| x == "mcap"))
+        .unwrap();
+    let bytes = std::fs::read(&mcap).unwrap();
+    std::fs::write(&mcap, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let out = cell(&["bag", "info", bag.to_str().unwrap()], domain);
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(65), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        stderr.contains(mcap.file_name().unwrap().to_str().unwrap()),
+        "{stderr}"
+    );
+
+    let out = cell(&["bag", "repair", bag.to_str().unwrap()], domain);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains("repaired"),
+        "{}",
+        text(&out.stdout)
+    );
+    let out = cell(&["bag", "info", bag.to_str().unwrap()], domain);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("/cell/machine_status"));
+
+    let out = cell(&["bag", "info", "/no/such/bag"], domain);
+    assert_clear_error(&out, &["/no/such/bag"]);
+}

@@ -15,7 +15,9 @@
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
+//! - `cell bag info BAG`, `cell bag repair BAG`: rosbag2 MCAP bags (see [`bag`]).
 
+pub mod bag;
 pub mod emit;
 pub mod hotwire;
 pub mod rrd;
@@ -99,6 +101,10 @@ enum Command {
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
     /// arguments or controller file, 65 a program the controller refuses.
     Stream(stream::StreamArgs),
+    /// Inspect or repair a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag repair BAG`. Exit
+    /// status: 64 bad arguments or no such path, 65 a bag that cannot be read.
+    #[command(subcommand)]
+    Bag(bag::BagCommand),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
     Node {
         /// The node's exec name.
@@ -153,6 +159,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Command::Hotwire(args) => hotwire::run(*args),
         Command::Emit(args) => emit::run(args),
         Command::Stream(args) => stream::run(args),
+        Command::Bag(command) => bag::run(command),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
             out,
