@@ -141,6 +141,21 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "{machine}"
     );
     assert!(program.contains("G93"), "4-axis inverse-time program");
+    // The recorder's bag holds the job's messages (finished: it has its summary).
+    let info = cell_bag::BagInfo::open(out_dir.path().join("bag")).expect("the demo's bag reads");
+    for (topic, ros_type) in [
+        ("/cell/toolpath", "cell_msgs/msg/Toolpath"),
+        ("/cell/machine_program", "cell_msgs/msg/MachineProgram"),
+        ("/cell/machine_status", "cell_msgs/msg/MachineStatus"),
+    ] {
+        let t = info
+            .topics
+            .iter()
+            .find(|t| t.name == topic)
+            .unwrap_or_else(|| panic!("{topic} not recorded: {info}"));
+        assert_eq!(t.type_name, ros_type);
+        assert!(t.message_count > 0, "{info}");
+    }
     // One Rerun recording for the whole cell, decodable, with every node's entities.
     let rrd = out_dir.path().join("cell.rrd");
     let reader = std::io::BufReader::new(std::fs::File::open(&rrd).unwrap());

@@ -44,6 +44,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("emitter", cell_emitter::node::main),
     ("machine_bridge", cell_bridge::node::main),
     ("job_runner", cell_runner::main),
+    ("recorder", cell_recorder::main),
 ];
 
 #[derive(Parser, Debug)]
@@ -182,6 +183,19 @@ pub fn main(argv: Vec<String>) -> ExitCode {
             if let Err(e) = std::fs::create_dir_all(&out) {
                 eprintln!("error: --out {}: {e}", out.display());
                 return ExitCode::from(cell_runtime::EXIT_USAGE);
+            }
+            // The recorder starts a fresh bag; the last run's is kept one run longer.
+            let bag = out.join("bag");
+            if bag.exists() {
+                let previous = out.join("bag.previous");
+                let _ = std::fs::remove_dir_all(&previous);
+                if let Err(e) = std::fs::rename(&bag, &previous) {
+                    eprintln!(
+                        "error: cannot move the last bag aside to {}: {e}",
+                        previous.display()
+                    );
+                    return ExitCode::from(1);
+                }
             }
             args.insert(0, format!("rerun:={rerun}"));
             let source = match file {

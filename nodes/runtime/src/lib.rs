@@ -14,6 +14,7 @@
 pub mod action;
 pub mod args;
 pub mod fastpath;
+pub mod graph;
 pub mod logging;
 pub mod node;
 pub mod params;

@@ -25,12 +25,16 @@ from ruamel.yaml import YAML
 
 def plain(v):
     """Decoded message to JSON-able values (field names as in the .msg)."""
+    if isinstance(v, float) and (v != v or v in (float("inf"), float("-inf"))):
+        # JSON has no NaN; null is how cell_msgs::json reads a NaN back (e.g. a HeatMap
+        # without a threshold).
+        return None
     if v is None or isinstance(v, (bool, int, float, str)):
         return v
     if isinstance(v, (bytes, bytearray)):
         return list(v)
     if hasattr(v, "tolist"):
-        return v.tolist()
+        return plain(v.tolist())
     if isinstance(v, (list, tuple)):
         return [plain(x) for x in v]
     if dataclasses.is_dataclass(v):

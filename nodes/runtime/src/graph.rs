@@ -1,0 +1,95 @@
+//! What other nodes publish: the ROS topics in the DDS graph, with their types and the QoS
+//! preset that matches their writers (for a recorder that subscribes to whatever it finds).
+
+use rustdds::policy::{Durability, Reliability};
+
+use crate::{CellNode, QosPreset};
+
+/// A topic some writer in the graph publishes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PublishedTopic {
+    /// ROS topic name, e.g. `/cell/toolpath`.
+    pub topic: String,
+    /// ROS type name, e.g. `cell_msgs/msg/Toolpath`.
+    pub ros_type: String,
+    /// The preset a subscriber needs to match the writer: transient-local writers are `Plan`,
+    /// best-effort ones `Stream`, other reliable ones `Status`.
+    pub qos: QosPreset,
+}
+
+/// `rt/cell/toolpath` → `/cell/toolpath`; `None` for services, actions' internal topics and
+/// DDS-only topics.
+pub fn ros_topic_name(dds: &str) -> Option<String> {
+    let rest = dds.strip_prefix("rt/")?;
+    (!rest.contains("/_action/")).then(|| format!("/{rest}"))
+}
+
+/// `cell_msgs::msg::dds_::Toolpath_` → `cell_msgs/msg/Toolpath`.
+pub fn ros_type_name(dds: &str) -> Option<String> {
+    let mut parts = dds.split("::");
+    let (package, kind, dds_, name) = (parts.next()?, parts.next()?, parts.next()?, parts.next()?);
+    if parts.next().is_some() || dds_ != "dds_" {
+        return None;
+    }
+    Some(format!("{package}/{kind}/{}", name.strip_suffix('_')?))
+}
+
+impl CellNode {
+    /// Topics the writers discovered so far publish (one entry per topic, sorted; our own
+    /// writers included).
+    pub fn published_topics(&self) -> Vec<PublishedTopic> {
+        let mut found: Vec<PublishedTopic> = self
+            .domain_participant()
+            .discovered_writers()
+            .into_iter()
+            .filter_map(|w| {
+                let data = &w.publication_topic_data;
+                let topic = ros_topic_name(&data.topic_name)?;
+                let ros_type = ros_type_name(&data.type_name)?;
+                let qos = if matches!(data.durability, Some(Durability::TransientLocal)) {
+                    QosPreset::Plan
+                } else if matches!(data.reliability, Some(Reliability::BestEffort)) {
+                    QosPreset::Stream
+                } else {
+                    QosPreset::Status
+                };
+                Some(PublishedTopic {
+                    topic,
+                    ros_type,
+                    qos,
+                })
+            })
+            .collect();
+        found.sort_by(|a, b| a.topic.cmp(&b.topic));
+        found.dedup_by(|a, b| a.topic == b.topic);
+        found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dds_names_map_to_ros_names() {
+        assert_eq!(
+            ros_topic_name("rt/cell/toolpath").as_deref(),
+            Some("/cell/toolpath")
+        );
+        assert_eq!(ros_topic_name("rq/cell/emit_programRequest"), None);
+        assert_eq!(ros_topic_name("rt/plan_hotwire/_action/feedback"), None);
+        assert_eq!(ros_topic_name("ros_discovery_info"), None);
+        assert_eq!(
+            ros_type_name("cell_msgs::msg::dds_::Toolpath_").as_deref(),
+            Some("cell_msgs/msg/Toolpath")
+        );
+        assert_eq!(
+            ros_type_name("std_msgs::msg::dds_::String_").as_deref(),
+            Some("std_msgs/msg/String")
+        );
+        assert_eq!(
+            ros_type_name("rmw_dds_common::msg::ParticipantEntitiesInfo"),
+            None
+        );
+    }
+}
