@@ -123,6 +123,20 @@ async fn grbl_sim(
     (sim, path.display().to_string())
 }
 
+/// The bridge node on `domain` driving these controller files.
+fn start_bridge(
+    domain: u16,
+    controllers: Vec<String>,
+) -> tokio::task::JoinHandle<anyhow::Result<()>> {
+    tokio::spawn(run(
+        node("machine_bridge", domain, false),
+        BridgeParams {
+            controllers,
+            ..BridgeParams::default()
+        },
+    ))
+}
+
 struct Operator {
     node: CellNode,
     client: Client,
@@ -348,12 +362,7 @@ async fn a_program_goes_through_the_bridge_and_the_simulator_executes_it_line_fo
     // The Rerun recording decodes with Rerun's own decoder and holds the machine's entities.
     shutdown.trigger();
     within(bridge).await.unwrap().unwrap();
-    let reader = std::io::BufReader::new(std::fs::File::open(&rrd).unwrap());
-    let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
-        .expect("a valid .rrd")
-        .collect::<Result<_, _>>()
-        .expect("decodes");
-    let dump = format!("{messages:?}");
+    let dump = common::rrd_dump(&rrd);
     for entity in [
         "/machine/cutter/position",
         "/machine/cutter/trace/0",
@@ -394,13 +403,7 @@ async fn twenty_link_drops_are_resumed_with_no_line_lost_or_repeated() {
     )
     .await;
     let domain = fresh_domain();
-    let bridge = tokio::spawn(run(
-        node("machine_bridge", domain, false),
-        BridgeParams {
-            controllers: vec![file],
-            ..BridgeParams::default()
-        },
-    ));
+    let bridge = start_bridge(domain, vec![file]);
     let op = operator(domain).await;
     let (result, _) = execute(
         &op.client,
@@ -441,13 +444,7 @@ async fn after_a_drop_the_operator_resumes_from_the_reported_line() {
     )
     .await;
     let domain = fresh_domain();
-    let bridge = tokio::spawn(run(
-        node("machine_bridge", domain, false),
-        BridgeParams {
-            controllers: vec![file],
-            ..BridgeParams::default()
-        },
-    ));
+    let bridge = start_bridge(domain, vec![file]);
     let mut op = operator(domain).await;
     let (lost, _) = execute(&op.client, goal(&program, ""), Duration::from_secs(300)).await;
     assert_eq!(lost.outcome, R::OUTCOME_LINK_LOST, "{}", lost.message);
@@ -525,13 +522,7 @@ async fn alarms_and_bad_lines_stop_the_program_and_name_the_line() {
     )
     .await;
     let domain = fresh_domain();
-    let bridge = tokio::spawn(run(
-        node("machine_bridge", domain, false),
-        BridgeParams {
-            controllers: vec![alarm_file, error_file],
-            ..BridgeParams::default()
-        },
-    ));
+    let bridge = start_bridge(domain, vec![alarm_file, error_file]);
     let mut op = operator(domain).await;
 
     let (alarm, _) = execute(
@@ -610,13 +601,7 @@ async fn hold_resume_and_abort_from_topic_and_service_act_within_one_status_cycl
     )
     .await;
     let domain = fresh_domain();
-    let bridge = tokio::spawn(run(
-        node("machine_bridge", domain, false),
-        BridgeParams {
-            controllers: vec![file],
-            ..BridgeParams::default()
-        },
-    ));
+    let bridge = start_bridge(domain, vec![file]);
     let mut op = operator(domain).await;
     let commands = op
         .node
@@ -765,13 +750,7 @@ async fn rapid_programs_run_on_the_rws_simulator_and_a_wrong_password_is_refused
     let good = controller("irb2600", "good.cred");
     let bad = controller("intruder", "bad.cred");
     let domain = fresh_domain();
-    let bridge = tokio::spawn(run(
-        node("machine_bridge", domain, false),
-        BridgeParams {
-            controllers: vec![good, bad],
-            ..BridgeParams::default()
-        },
-    ));
+    let bridge = start_bridge(domain, vec![good, bad]);
     let mut op = operator(domain).await;
     let program = emitted("wall", "abb-irb2600-waam", "wall-9");
 

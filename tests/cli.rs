@@ -93,14 +93,7 @@ fn probe_launch_runs_two_nodes_that_exchange_a_toolpath_and_heat_maps() {
         ("probe", &["/hotwire/trajectory", "/sheet/heat"][..]),
     ] {
         let file = rrd.path().join(format!("{node}.rrd"));
-        let reader = std::io::BufReader::new(
-            std::fs::File::open(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display())),
-        );
-        let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
-            .unwrap_or_else(|e| panic!("{} is not a valid .rrd: {e}", file.display()))
-            .collect::<Result<_, _>>()
-            .unwrap_or_else(|e| panic!("{}: {e}", file.display()));
-        let dump = format!("{messages:?}");
+        let dump = common::rrd_dump(&file);
         for entity in entities {
             assert!(dump.contains(entity), "{} has no {entity}", file.display());
         }
@@ -158,12 +151,7 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
     }
     // One Rerun recording for the whole cell, decodable, with every node's entities.
     let rrd = out_dir.path().join("cell.rrd");
-    let reader = std::io::BufReader::new(std::fs::File::open(&rrd).unwrap());
-    let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
-        .expect("a valid .rrd")
-        .collect::<Result<_, _>>()
-        .expect("decodes");
-    let dump = format!("{messages:?}");
+    let dump = common::rrd_dump(&rrd);
     for entity in [
         "/hotwire/trajectory",
         "/hotwire/loss",

@@ -132,3 +132,16 @@ pub fn venv_python(name: &str, requirements: &str, import: &str) -> std::path::P
     }
     python
 }
+
+/// Every message of an `.rrd` file, decoded by Rerun's own decoder, as one debug string to
+/// search for entity paths; fails the test if the file is not a valid recording.
+pub fn rrd_dump(path: &std::path::Path) -> String {
+    let reader = std::io::BufReader::new(
+        std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    );
+    let messages: Vec<_> = re_log_encoding::DecoderApp::decode_eager(reader)
+        .unwrap_or_else(|e| panic!("{} is not a valid .rrd: {e}", path.display()))
+        .collect::<Result<_, _>>()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    format!("{messages:?}")
+}
