@@ -942,14 +942,21 @@ impl State {
         }
     }
 
-    fn load_program(&mut self, c: &Ctx<'_>) -> Response<Full<Bytes>> {
-        if self.running() {
-            return self.error(
+    /// The controller's answer to a program edit while RAPID runs, if it runs.
+    fn refuse_while_running(&self, c: &Ctx<'_>) -> Option<Response<Full<Bytes>>> {
+        self.running().then(|| {
+            self.error(
                 c.repr,
                 400,
                 codes::EXEC_STATE,
                 "Not allowed while RAPID is running",
-            );
+            )
+        })
+    }
+
+    fn load_program(&mut self, c: &Ctx<'_>) -> Response<Full<Bytes>> {
+        if let Some(refused) = self.refuse_while_running(c) {
+            return refused;
         }
         let Some(path) = c.form.get("progpath") else {
             return self.error(c.repr, 400, codes::INVALID_ARG, "progpath missing");
@@ -1027,13 +1034,8 @@ impl State {
     }
 
     fn load_module(&mut self, c: &Ctx<'_>) -> Response<Full<Bytes>> {
-        if self.running() {
-            return self.error(
-                c.repr,
-                400,
-                codes::EXEC_STATE,
-                "Not allowed while RAPID is running",
-            );
+        if let Some(refused) = self.refuse_while_running(c) {
+            return refused;
         }
         let Some(path) = c.form.get("modulepath") else {
             return self.error(c.repr, 400, codes::INVALID_ARG, "modulepath missing");
@@ -1072,13 +1074,8 @@ impl State {
     }
 
     fn reset_pp(&mut self, c: &Ctx<'_>) -> Response<Full<Bytes>> {
-        if self.running() {
-            return self.error(
-                c.repr,
-                400,
-                codes::EXEC_STATE,
-                "Not allowed while RAPID is running",
-            );
+        if let Some(refused) = self.refuse_while_running(c) {
+            return refused;
         }
         if !self.has_main {
             return self.error(
