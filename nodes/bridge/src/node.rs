@@ -276,6 +276,10 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
             }
             Some(ended) = ended_rx.recv() => {
                 if let Some(g) = ended.goal { running.remove(&g); }
+                // Draw where the job ended now, not at the next tick: the node may be told
+                // to stop before it.
+                log_statuses_to_rerun(&node, &controllers, &mut rerun_logger, frame);
+                frame += 1;
             }
             received = async { programs.as_mut().expect("guarded").recv().await }, if programs.is_some() => {
                 let Some(r) = received else { anyhow::bail!("{}: the subscription ended", p.program_topic) };
@@ -304,10 +308,31 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
                         }
                     }
                 }
+                log_statuses_to_rerun(&node, &controllers, &mut rerun_logger, frame);
+                rerun_logger.flush(node.rerun());
                 node.rerun().flush();
                 return Ok(());
             }
         }
+    }
+}
+
+/// Logs every controller's status to Rerun now, outside the status tick.
+fn log_statuses_to_rerun(
+    node: &CellNode,
+    controllers: &[Controller],
+    logger: &mut MachineStatusLogger,
+    frame: i64,
+) {
+    let stamp = Time::now();
+    node.rerun().set_time(&stamp, frame);
+    for c in controllers {
+        let mut s = c.status();
+        s.header = Header {
+            stamp,
+            frame_id: s.machine_id.clone(),
+        };
+        logger.log(node.rerun(), &s);
     }
 }
 

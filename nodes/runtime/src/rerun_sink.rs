@@ -242,6 +242,29 @@ struct MachineTrace {
     /// Points not yet logged as a chunk, after the previous chunk's last point.
     pending: Vec<[[f32; 3]; 2]>,
     chunks: u64,
+    /// Whether the machine reports a second carriage (drawn as a second strip).
+    has_second: bool,
+}
+
+impl MachineTrace {
+    /// Logs the pending points as the next `trace/<n>` chunk, if they make a line.
+    fn write_chunk(&mut self, sink: &RerunSink, rec: &RecordingStream, base: &str) {
+        if self.pending.len() < 2 {
+            return;
+        }
+        let mut strips = vec![self.pending.iter().map(|p| p[0]).collect::<Vec<_>>()];
+        if self.has_second {
+            strips.push(self.pending.iter().map(|p| p[1]).collect());
+        }
+        sink.report(rec.log(
+            format!("{base}/trace/{}", self.chunks),
+            &rerun::LineStrips3D::new(strips),
+        ));
+        self.chunks += 1;
+        // The next chunk starts where this one ended, so the path has no gaps.
+        let last = *self.pending.last().expect("two points or more");
+        self.pending = vec![last];
+    }
 }
 
 /// The tool point (X, Y, Z) and the second carriage (U, V, W, or A, B, C on Mach3-style
@@ -301,21 +324,9 @@ impl MachineStatusLogger {
             // A full chunk goes out, and so does the rest once the machine stops moving, so a
             // finished job's whole path is in the recording.
             let stopped = status.state != MachineStatus::STATE_RUNNING;
-            if trace.pending.len() > TRACE_CHUNK_POINTS || (stopped && trace.pending.len() > 1) {
-                let chunk = trace.chunks;
-                let tool_strip: Vec<[f32; 3]> = trace.pending.iter().map(|p| p[0]).collect();
-                let mut strips = vec![tool_strip];
-                if second.is_some() {
-                    strips.push(trace.pending.iter().map(|p| p[1]).collect());
-                }
-                sink.report(rec.log(
-                    format!("{base}/trace/{chunk}"),
-                    &rerun::LineStrips3D::new(strips),
-                ));
-                trace.chunks += 1;
-                // The next chunk starts where this one ended, so the path has no gaps.
-                let last = *trace.pending.last().expect("more than one point");
-                trace.pending = vec![last];
+            trace.has_second |= second.is_some();
+            if trace.pending.len() > TRACE_CHUNK_POINTS || stopped {
+                trace.write_chunk(sink, rec, &base);
             }
         }
         for (name, value) in [
@@ -324,6 +335,17 @@ impl MachineStatusLogger {
             ("acked_line", f64::from(status.acked_line)),
         ] {
             sink.report(rec.log(format!("{base}/{name}"), &rerun::Scalars::single(value)));
+        }
+    }
+}
+
+impl MachineStatusLogger {
+    /// Logs every machine's pending trace points, so a recording that ends mid-job (or
+    /// before the status after the last move) still holds the whole path moved.
+    pub fn flush(&mut self, sink: &RerunSink) {
+        let Some(rec) = sink.stream() else { return };
+        for (machine_id, trace) in &mut self.traces {
+            trace.write_chunk(sink, rec, &format!("/machine/{machine_id}"));
         }
     }
 }
@@ -371,6 +393,42 @@ mod tests {
         // Fewer positions than names (a controller reporting fewer axes): the rest are absent.
         let (tool, second) = carriage_points(&status(&["X", "Y", "U"], &[1.0, 2.0])).unwrap();
         assert_eq!((tool, second), ([1.0, 2.0, 0.0], None));
+    }
+
+    /// A job shorter than a chunk, cut off while still RUNNING: `flush` alone puts its
+    /// path in the file (the demo's bridge is stopped before its next status tick).
+    #[test]
+    fn flush_writes_a_running_jobs_short_trace() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = RerunTarget::Save(dir.path().join("{node}.rrd"));
+        let sink = RerunSink::open(&target, "bridge", "test-run").unwrap();
+        let mut logger = MachineStatusLogger::default();
+        for x in [0.0, 5.0, 10.0] {
+            logger.log(
+                &sink,
+                &MachineStatus {
+                    machine_id: "sim".into(),
+                    job_id: "job-1".into(),
+                    state: MachineStatus::STATE_RUNNING,
+                    axis_names: vec!["X".into(), "Y".into(), "U".into(), "V".into()],
+                    axis_positions: vec![x, 1.0, x, 2.0],
+                    ..MachineStatus::default()
+                },
+            );
+        }
+        let written = |sink: &RerunSink| {
+            sink.flush();
+            let file = std::fs::File::open(dir.path().join("bridge.rrd")).unwrap();
+            let messages: Vec<_> =
+                re_log_encoding::DecoderApp::decode_eager(std::io::BufReader::new(file))
+                    .unwrap()
+                    .collect::<Result<_, _>>()
+                    .unwrap();
+            format!("{messages:?}").contains("/machine/sim/trace/0")
+        };
+        assert!(!written(&sink), "3 points are below a chunk");
+        logger.flush(&sink);
+        assert!(written(&sink), "flush writes the pending points");
     }
 
     #[test]
