@@ -293,12 +293,19 @@ impl Supervisor {
             .stderr(Stdio::piped())
             .kill_on_drop(true)
             .process_group(0);
-        #[cfg(target_os = "linux")]
-        // SAFETY: between fork and exec we only make the prctl system call,
-        // which is async-signal-safe and touches no memory of ours.
+        // SAFETY: between fork and exec we only make the sigaction and prctl system calls,
+        // which are async-signal-safe and touch no memory of ours.
         unsafe {
             cmd.pre_exec(|| {
-                nix::sys::prctl::set_pdeathsig(Signal::SIGTERM).map_err(std::io::Error::from)
+                // A launcher started in the background of a non-interactive shell (`cell demo &`
+                // in a script, nohup) inherits SIGINT ignored, and so would every node: then
+                // our stop signal is lost and nodes are killed without finishing (a bag left
+                // unfinished). Nodes always start with the default action.
+                nix::sys::signal::signal(Signal::SIGINT, nix::sys::signal::SigHandler::SigDfl)
+                    .map_err(std::io::Error::from)?;
+                #[cfg(target_os = "linux")]
+                nix::sys::prctl::set_pdeathsig(Signal::SIGTERM).map_err(std::io::Error::from)?;
+                Ok(())
             });
         }
         let mut child = cmd.spawn()?;
