@@ -45,6 +45,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("machine_bridge", cell_bridge::node::main),
     ("job_runner", cell_runner::main),
     ("recorder", cell_recorder::main),
+    ("replayer", cell_replayer::main),
 ];
 
 #[derive(Parser, Debug)]
