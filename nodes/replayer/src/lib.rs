@@ -16,7 +16,7 @@
 //!   (`from:=to`) pick and rename topics.
 //!
 //! A reader thread reads, filters and decodes ahead of the clock (within a memory budget), so
-//! decompressing a chunk never delays a message that is due.
+//! decompressing a chunk does not hold up a message that is due.
 
 #![warn(missing_docs)]
 
@@ -470,7 +470,7 @@ impl Replay {
         let service_name = server.name().to_owned();
         let service_stop = StopOnDrop(Shutdown::new());
         let stop = service_stop.0.clone();
-        tokio::spawn(async move {
+        let service = tokio::spawn(async move {
             server
                 .serve(&stop, move |request: SetBoolRequest| {
                     let control_tx = control_tx.clone();
@@ -676,7 +676,10 @@ impl Replay {
                 }
             }
         }
+        // The server holds a clone of the node: let it go before the caller drops the node,
+        // or the node outlives its graph spinner when the runtime shuts down.
         drop(service_stop);
+        let _ = service.await;
         outcome?;
         Ok(ReplaySummary {
             published: progress.all_published,
@@ -1094,6 +1097,35 @@ mod tests {
         let data = e.downcast_ref::<DataError>().expect("a DataError");
         assert!(data.0.contains(&mcap.display().to_string()), "{}", data.0);
         assert!(data.0.contains("repair"), "{}", data.0);
+    }
+
+    #[test]
+    fn the_summary_is_one_line_with_what_was_left_out() {
+        let mut summary = ReplaySummary {
+            published: 12,
+            failed: 0,
+            undecodable: 0,
+            unknown_type: 0,
+            before_offset: 0,
+            passes: 1,
+            topics: 1,
+            elapsed: Duration::from_millis(2500),
+            stopped: false,
+            rate: 2.0,
+        };
+        assert_eq!(
+            summary.to_string(),
+            "replayed 12 messages on 1 topic in 2.5 s at ×2 (1 pass)"
+        );
+        summary.passes = 3;
+        summary.stopped = true;
+        summary.unknown_type = 4;
+        summary.before_offset = 2;
+        assert_eq!(
+            summary.to_string(),
+            "replayed 12 messages on 1 topic in 2.5 s at ×2 (3 passes), stopped early; \
+             2 before the start offset; 4 of unknown types"
+        );
     }
 
     #[test]
