@@ -2,7 +2,7 @@
 //!
 //! The `.msg`/`.srv`/`.action` files under `msgs/` are the single source of truth. This crate embeds
 //! them ([`registry`]), parses them ([`idl`]), provides matching serde types (this module and
-//! [`builtin_interfaces`], [`std_msgs`], [`geometry_msgs`]), writes and reads ROS 2 CDR
+//! [`builtin_interfaces`], [`std_msgs`], [`std_srvs`], [`geometry_msgs`]), writes and reads ROS 2 CDR
 //! ([`to_cdr`], [`from_cdr`]) and decodes CDR from the definitions alone ([`dynamic`]). The
 //! drift test (`tests/drift.rs`) checks every Rust type against its definition.
 //!
@@ -18,6 +18,7 @@ pub mod idl;
 pub mod json;
 pub mod registry;
 pub mod std_msgs;
+pub mod std_srvs;
 
 mod action;
 mod msg;
@@ -121,6 +122,8 @@ macro_rules! for_each_message {
             $crate::geometry_msgs::Vector3 => "geometry_msgs/msg/Vector3",
             $crate::geometry_msgs::Quaternion => "geometry_msgs/msg/Quaternion",
             $crate::geometry_msgs::Pose => "geometry_msgs/msg/Pose",
+            $crate::std_srvs::SetBoolRequest => "std_srvs/srv/SetBool_Request",
+            $crate::std_srvs::SetBoolResponse => "std_srvs/srv/SetBool_Response",
             $crate::Toolpath => "cell_msgs/msg/Toolpath",
             $crate::ToolpathSegment => "cell_msgs/msg/ToolpathSegment",
             $crate::HeatMap => "cell_msgs/msg/HeatMap",

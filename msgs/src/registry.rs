@@ -74,6 +74,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../std/geometry_msgs/msg/Pose.msg"),
     ),
     (
+        "std_srvs/srv/SetBool",
+        Kind::Srv,
+        include_str!("../std/std_srvs/srv/SetBool.srv"),
+    ),
+    (
         "cell_msgs/msg/Toolpath",
         Kind::Msg,
         include_str!("../msg/Toolpath.msg"),
@@ -223,7 +228,7 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        assert_eq!(names.len(), 14 + 2 * 2 + 2 * 3);
+        assert_eq!(names.len(), 14 + 3 * 2 + 2 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));

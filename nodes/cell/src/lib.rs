@@ -15,7 +15,8 @@
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
-//! - `cell bag info BAG`, `cell bag repair BAG`: rosbag2 MCAP bags (see [`bag`]).
+//! - `cell bag info BAG`, `cell bag repair BAG`: rosbag2 MCAP bags; `cell bag play BAG`
+//!   republishes one over DDS with its recorded timing (see [`bag`]).
 
 pub mod bag;
 pub mod emit;
@@ -45,6 +46,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("machine_bridge", cell_bridge::node::main),
     ("job_runner", cell_runner::main),
     ("recorder", cell_recorder::main),
+    ("replayer", cell_replayer::main),
 ];
 
 #[derive(Parser, Debug)]
@@ -102,8 +104,9 @@ enum Command {
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
     /// arguments or controller file, 65 a program the controller refuses.
     Stream(stream::StreamArgs),
-    /// Inspect or repair a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag repair BAG`. Exit
-    /// status: 64 bad arguments or no such path, 65 a bag that cannot be read.
+    /// Inspect, repair or play a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag repair BAG`,
+    /// `cell bag play BAG`. Exit status: 64 bad arguments or no such path, 65 a bag that cannot
+    /// be read.
     #[command(subcommand)]
     Bag(bag::BagCommand),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).

@@ -46,10 +46,17 @@ pub const EXIT_DATA: u8 = 65;
 #[error("{0}")]
 pub struct ParamError(pub String);
 
+/// Input data a node's body cannot use (e.g. a bag that is truncated or corrupt). [`run_node`]
+/// exits with [`EXIT_DATA`] when the body's error is one.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct DataError(pub String);
+
 /// Runs a node binary: logging, command line (`argv` excludes the program name), node set-up
 /// with OS-signal shutdown, parameters validated into `P`, then `body`. Any error is printed
 /// once, as one line, and becomes a non-zero exit; set-up errors (arguments, parameters, the
-/// environment) and a [`ParamError`] from `body` exit with [`EXIT_USAGE`].
+/// environment) and a [`ParamError`] from `body` exit with [`EXIT_USAGE`], a [`DataError`] from
+/// `body` with [`EXIT_DATA`].
 pub fn run_node<P, F, Fut>(default_name: &str, argv: Vec<String>, body: F) -> ExitCode
 where
     P: serde::Serialize + serde::de::DeserializeOwned,
@@ -96,6 +103,8 @@ where
                 eprintln!("error: {default_name}: {e:#}");
                 if e.downcast_ref::<ParamError>().is_some() {
                     ExitCode::from(EXIT_USAGE)
+                } else if e.downcast_ref::<DataError>().is_some() {
+                    ExitCode::from(EXIT_DATA)
                 } else {
                     ExitCode::FAILURE
                 }

@@ -308,6 +308,8 @@ mod tests {
             (t.package_name(), t.type_name()),
             ("cell_msgs", "EmitProgram")
         );
+        let t = service_type::<cell_msgs::std_srvs::SetBoolRequest>().unwrap();
+        assert_eq!((t.package_name(), t.type_name()), ("std_srvs", "SetBool"));
         assert!(service_type::<cell_msgs::EmitProgramResponse>().is_err());
         assert!(service_type::<cell_msgs::Toolpath>().is_err());
         assert!(service_type::<cell_msgs::PlanHotwireGoal>().is_err());
