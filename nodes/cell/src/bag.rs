@@ -1,7 +1,8 @@
-//! `cell bag info BAG` and `cell bag repair BAG`: rosbag2 MCAP bags without DDS, through
-//! [`cell_bag`].
+//! `cell bag info BAG`, `cell bag repair BAG` and `cell bag to-rerun BAG`: rosbag2 MCAP bags
+//! without DDS, through [`cell_bag`].
 //!
 //! - `info` prints topics, types, counts, duration, size and files, like `ros2 bag info`.
+//! - `to-rerun` converts a bag into a Rerun recording (see [`crate::bag_rerun`]).
 //! - `repair` restores a bag whose writer was killed: every file is cut after its last complete
 //!   chunk and rewritten with a summary (the original kept as `*.orig`), and `metadata.yaml` is
 //!   regenerated.
@@ -29,11 +30,18 @@ pub enum BagCommand {
         /// The bag directory or .mcap file.
         bag: PathBuf,
     },
+    /// Convert a bag into a Rerun recording drawn like the live nodes' (toolpaths, heat maps
+    /// and exposure scalars, machine traces, programs; see `cell_cli::bag_rerun`), with a
+    /// summary per topic. Messages of unknown types are counted and skipped.
+    ToRerun(crate::bag_rerun::ToRerunArgs),
 }
 
 /// Runs a `cell bag` subcommand.
 pub fn run(command: BagCommand) -> ExitCode {
-    let (BagCommand::Info { bag } | BagCommand::Repair { bag }) = &command;
+    let bag = match &command {
+        BagCommand::Info { bag } | BagCommand::Repair { bag } => bag,
+        BagCommand::ToRerun(args) => &args.bag,
+    };
     if !bag.exists() {
         eprintln!(
             "error: {}: no such bag (a directory or .mcap file)",
@@ -42,6 +50,7 @@ pub fn run(command: BagCommand) -> ExitCode {
         return ExitCode::from(cell_runtime::EXIT_USAGE);
     }
     let result = match &command {
+        BagCommand::ToRerun(args) => return crate::bag_rerun::run(args),
         BagCommand::Info { bag } => cell_bag::BagInfo::open(bag).map(|info| print!("{info}")),
         BagCommand::Repair { bag } => cell_bag::repair(bag).map(|report| {
             let mut repaired = 0;

@@ -15,9 +15,11 @@
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
-//! - `cell bag info BAG`, `cell bag repair BAG`: rosbag2 MCAP bags (see [`bag`]).
+//! - `cell bag info BAG`, `cell bag repair BAG`, `cell bag to-rerun BAG --out FILE.rrd`:
+//!   rosbag2 MCAP bags (see [`bag`] and, for the Rerun conversion, [`bag_rerun`]).
 
 pub mod bag;
+pub mod bag_rerun;
 pub mod emit;
 pub mod hotwire;
 pub mod rrd;
@@ -102,8 +104,9 @@ enum Command {
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
     /// arguments or controller file, 65 a program the controller refuses.
     Stream(stream::StreamArgs),
-    /// Inspect or repair a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag repair BAG`. Exit
-    /// status: 64 bad arguments or no such path, 65 a bag that cannot be read.
+    /// Inspect, repair or convert a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag repair
+    /// BAG`, `cell bag to-rerun BAG --out FILE.rrd`. Exit status: 64 bad arguments, no such
+    /// path or an output that cannot be written, 65 a bag that cannot be read.
     #[command(subcommand)]
     Bag(bag::BagCommand),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
@@ -206,18 +209,104 @@ pub fn main(argv: Vec<String>) -> ExitCode {
                 }
             };
             let status = run_launch(source, args, Some(StopOthersWhen::Node(until)));
+            let mut outputs = DemoOutputs::default();
             if merge {
                 let cell_rrd = out.join("cell.rrd");
                 match rrd::merge_dir(&rrd_dir, &cell_rrd) {
-                    Ok(n) => println!(
-                        "cell: {} ({n} Rerun messages from every node)",
-                        cell_rrd.display()
-                    ),
+                    Ok(n) => outputs.rows.push((
+                        "rerun",
+                        format!("{} ({n} Rerun messages from every node)", cell_rrd.display()),
+                    )),
                     Err(e) => eprintln!("error: {}: {e:#}", cell_rrd.display()),
                 }
             }
+            // The recorder has finished the bag by now (it stops with the other nodes).
+            if bag.exists() {
+                outputs.add_bag(&bag, &out.join("bag.rrd"), &out);
+            }
+            print!("{outputs}");
             status
         }
+    }
+}
+
+/// The table `cell demo` prints last: what it wrote, one row per file.
+#[derive(Debug, Default)]
+struct DemoOutputs {
+    /// (kind, description) rows.
+    rows: Vec<(&'static str, String)>,
+}
+
+impl DemoOutputs {
+    /// Adds the bag (from its summary), its conversion to `bag_rrd` and the program files the
+    /// bag's `MachineProgram`s name that the emitter wrote into `out`. A bag that cannot be
+    /// read or converted is reported as an error line; the run's status stays the nodes'.
+    fn add_bag(&mut self, bag: &std::path::Path, bag_rrd: &std::path::Path, out: &std::path::Path) {
+        match cell_bag::BagInfo::open(bag) {
+            Ok(info) => self.rows.push((
+                "bag",
+                format!(
+                    "{}: {} topics, {} messages, {} (`cell bag info {0}`)",
+                    bag.display(),
+                    info.topics.len(),
+                    info.message_count,
+                    cell_bag::reader::human_size(info.size)
+                ),
+            )),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return;
+            }
+        }
+        let options = bag_rerun::ConvertOptions {
+            // Not the nodes' run id: the bag's entities would merge into theirs in a viewer.
+            recording_id: format!("cell-{}-bag", std::process::id()),
+            progress: false,
+        };
+        match bag_rerun::convert(bag, bag_rrd, &options) {
+            Ok(report) => {
+                self.rows.push((
+                    "rerun",
+                    format!(
+                        "{} (the bag drawn: {} messages converted, {} skipped)",
+                        bag_rrd.display(),
+                        report.converted(),
+                        report.skipped()
+                    ),
+                ));
+                for program in &report.programs {
+                    let path = out.join(&program.file);
+                    if path.is_file() {
+                        self.rows.push((
+                            "program",
+                            format!(
+                                "{} (job {}, {} lines)",
+                                path.display(),
+                                program.job_id,
+                                program.lines
+                            ),
+                        ));
+                    }
+                }
+            }
+            Err(e) => eprintln!("error: {}: {e}", bag_rrd.display()),
+        }
+    }
+}
+
+impl std::fmt::Display for DemoOutputs {
+    /// `cell: outputs` and a table in the style of job_runner's summary.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.rows.is_empty() {
+            return Ok(());
+        }
+        writeln!(f, "cell: outputs")?;
+        writeln!(f, "| output  | file |")?;
+        writeln!(f, "|---------|------|")?;
+        for (kind, text) in &self.rows {
+            writeln!(f, "| {kind:<7} | {text} |")?;
+        }
+        Ok(())
     }
 }
 
