@@ -47,13 +47,22 @@ pub struct ToRerunArgs {
 /// The default `--out`: `BAG.rrd` beside the bag (`run1/` gives `run1.rrd`, `run1.mcap`
 /// gives `run1.rrd`).
 pub fn default_out(bag: &Path) -> PathBuf {
-    let bag = bag.components().as_path();
+    let bag = named(bag);
     if bag.is_dir() {
-        let mut name = bag.file_name().unwrap_or(bag.as_os_str()).to_owned();
+        let mut name = bag.file_name().unwrap_or_default().to_owned();
         name.push(".rrd");
         bag.with_file_name(name)
     } else {
         bag.with_extension("rrd")
+    }
+}
+
+/// `path` without a trailing `/`, made absolute when it has no name of its own (`.`, `..`).
+fn named(path: &Path) -> PathBuf {
+    let path = path.components().as_path();
+    match path.file_name() {
+        Some(_) => path.to_owned(),
+        None => std::fs::canonicalize(path).unwrap_or_else(|_| path.to_owned()),
     }
 }
 
@@ -63,9 +72,7 @@ pub fn run(args: &ToRerunArgs) -> ExitCode {
     let out = args.out.clone().unwrap_or_else(|| default_out(&args.bag));
     let recording_id = format!(
         "bag-{}",
-        args.bag
-            .components()
-            .as_path()
+        named(&args.bag)
             .file_stem()
             .unwrap_or_default()
             .to_string_lossy()
@@ -188,7 +195,7 @@ pub enum ConvertError {
     #[error("{0}")]
     Bag(BagError),
     /// The bag's writer did not finish it.
-    #[error("{source}\n  (try `cell bag repair {}` first)", bag.display())]
+    #[error("{source}: `cell bag repair {}`", bag.display())]
     Unfinished {
         /// The bag given.
         bag: PathBuf,
@@ -490,6 +497,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_default_out_is_beside_the_bag() {
+        let dir = tempfile::tempdir().unwrap();
+        let bag = dir.path().join("run1");
+        std::fs::create_dir(&bag).unwrap();
+        assert_eq!(default_out(&bag), dir.path().join("run1.rrd"));
+        let mut slash = bag.clone().into_os_string();
+        slash.push("/");
+        assert_eq!(default_out(Path::new(&slash)), dir.path().join("run1.rrd"));
+        let file = dir.path().join("run2_0.mcap");
+        assert_eq!(default_out(&file), dir.path().join("run2_0.rrd"));
+        let here = default_out(Path::new("."));
+        assert_eq!(here.extension().unwrap(), "rrd");
+        assert_ne!(here.file_name().unwrap(), "..rrd");
+    }
+
+    #[test]
     fn heat_maps_are_split_by_frame() {
         let mut heat = HeatMap::default();
         assert_eq!(heat_map_entity("/cell/exposure", &heat), "/cell/exposure");
@@ -518,21 +541,12 @@ mod tests {
         assert_eq!(text_line(&long).chars().count(), MAX_TEXT_CHARS + 1);
         let status = MachineStatus {
             header: cell_msgs::std_msgs::Header {
-                stamp: Time {
-                    sec: 7,
-                    nanosec: 9,
-                },
+                stamp: Time { sec: 7, nanosec: 9 },
                 frame_id: String::new(),
             },
             ..Default::default()
         };
         let value = serde_json::to_value(&status).unwrap();
-        assert_eq!(
-            header_stamp(&value),
-            Some(Time {
-                sec: 7,
-                nanosec: 9
-            })
-        );
+        assert_eq!(header_stamp(&value), Some(Time { sec: 7, nanosec: 9 }));
     }
 }

@@ -215,7 +215,10 @@ pub fn main(argv: Vec<String>) -> ExitCode {
                 match rrd::merge_dir(&rrd_dir, &cell_rrd) {
                     Ok(n) => outputs.rows.push((
                         "rerun",
-                        format!("{} ({n} Rerun messages from every node)", cell_rrd.display()),
+                        format!(
+                            "{} ({n} Rerun messages from every node)",
+                            cell_rrd.display()
+                        ),
                     )),
                     Err(e) => eprintln!("error: {}: {e:#}", cell_rrd.display()),
                 }
@@ -243,16 +246,20 @@ impl DemoOutputs {
     /// read or converted is reported as an error line; the run's status stays the nodes'.
     fn add_bag(&mut self, bag: &std::path::Path, bag_rrd: &std::path::Path, out: &std::path::Path) {
         match cell_bag::BagInfo::open(bag) {
-            Ok(info) => self.rows.push((
-                "bag",
-                format!(
-                    "{}: {} topics, {} messages, {} (`cell bag info {0}`)",
-                    bag.display(),
-                    info.topics.len(),
-                    info.message_count,
-                    cell_bag::reader::human_size(info.size)
+            // First: the bag is the run's record; the rest is drawn from it or beside it.
+            Ok(info) => self.rows.insert(
+                0,
+                (
+                    "bag",
+                    format!(
+                        "{}: {} topics, {} messages, {} (`cell bag info {0}`)",
+                        bag.display(),
+                        info.topics.len(),
+                        info.message_count,
+                        cell_bag::reader::human_size(info.size)
+                    ),
                 ),
-            )),
+            ),
             Err(e) => {
                 eprintln!("error: {e}");
                 return;

@@ -518,7 +518,13 @@ mod tests {
             ..HeatMap::default()
         };
         let stats = HeatMapStats::of(&heat(vec![1.0, f32::NAN, 5.0, 0.0])).unwrap();
-        assert_eq!(stats, HeatMapStats { max: 5.0, mean: 2.0 });
+        assert_eq!(
+            stats,
+            HeatMapStats {
+                max: 5.0,
+                mean: 2.0
+            }
+        );
         assert_eq!(HeatMapStats::of(&heat(vec![f32::NAN])), None);
         assert_eq!(HeatMapStats::of(&heat(vec![])), None);
     }
