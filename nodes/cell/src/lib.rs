@@ -4,7 +4,7 @@
 //!   supervises them (see [`cell_launch`]).
 //! - `cell demo` runs the demo cell from `launch_scripts/demo.launch.yaml` (embedded in the
 //!   binary, so it works from any directory): a hot-wire wing planned, emitted and streamed to
-//!   the GRBL simulator; programs and `cell.rrd` in `demo-out/`.
+//!   the GRBL simulator; the program, the bag, `cell.rrd` and `bag.rrd` in `demo-out/`.
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
 //! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
@@ -72,9 +72,11 @@ enum Command {
     },
     /// Run the demo cell: a hot-wire wing planned, emitted for the 4-axis GRBL cutter and
     /// streamed to the in-repo GRBL simulator, with a summary table at the end. Writes the
-    /// program and `cell.rrd` (every node's Rerun log in one recording) to --out.
+    /// program, the bag of every topic, `cell.rrd` (every node's Rerun log in one recording)
+    /// and `bag.rrd` (the bag drawn) to --out, and lists them last.
     Demo {
-        /// Output directory: the programs, `rrd/<node>.rrd` and the merged `cell.rrd`.
+        /// Output directory: the programs, the bag (`bag/`, drawn into `bag.rrd`),
+        /// `rrd/<node>.rrd` and the merged `cell.rrd`.
         #[arg(long, default_value = "demo-out")]
         out: PathBuf,
         /// Rerun output for every node: `save` (into --out, merged into cell.rrd), `off`,
