@@ -149,6 +149,67 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         assert_eq!(t.type_name, ros_type);
         assert!(t.message_count > 0, "{info}");
     }
+    // Two independent decoders (PyPI mcap + mcap-ros2-support, rosbags' AnyReader) decode
+    // every message of every topic; check_bag.py fails on any error.
+    let python = common::venv_python("bag-venv", "nodes/bag/tests/py/requirements.txt", "rosbags");
+    let check = Command::new(&python)
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/nodes/bag/tests/py/check_bag.py"
+        ))
+        .arg(out_dir.path().join("bag"))
+        .output()
+        .expect("run check_bag.py");
+    assert!(
+        check.status.success(),
+        "check_bag.py: {}",
+        text(&check.stderr)
+    );
+    for reader in ["mcap", "rosbags"] {
+        let decoded: Vec<serde_json::Value> = text(&check.stdout)
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("JSON line"))
+            .filter(|v: &serde_json::Value| v["reader"] == reader)
+            .collect();
+        assert_eq!(
+            decoded.len() as u64,
+            info.message_count,
+            "{reader} decoded every message"
+        );
+        for t in &info.topics {
+            let n = decoded.iter().filter(|v| v["topic"] == t.name).count() as u64;
+            assert_eq!(n, t.message_count, "{reader}: {}", t.name);
+        }
+    }
+    // The last thing printed: what the demo wrote, after job_runner's table.
+    let outputs = stdout
+        .find("cell: outputs")
+        .unwrap_or_else(|| panic!("no outputs summary in {stdout}"));
+    assert!(stdout.find("| machine |").unwrap() < outputs, "{stdout}");
+    let outputs = &stdout[outputs..];
+    let bag_row = format!(
+        "| bag     | {}: {} topics, {} messages, ",
+        out_dir.path().join("bag").display(),
+        info.topics.len(),
+        info.message_count
+    );
+    assert!(outputs.contains(&bag_row), "{bag_row:?} not in {outputs}");
+    for file in ["cell.rrd", "bag.rrd", "demo-wing.ngc"] {
+        let path = out_dir.path().join(file).display().to_string();
+        assert!(outputs.contains(&path), "{path} not in {outputs}");
+    }
+    // The bag drawn as a recording: the same entities as the live nodes', plus exposure.
+    let dump = common::rrd_dump(&out_dir.path().join("bag.rrd"));
+    for entity in [
+        "/hotwire/trajectory",
+        "/cell/exposure/hotwire_root/max",
+        "/cell/exposure_matrix/hotwire_root",
+        "/emitter/log",
+        "/programs/demo-wing/demo-wing.ngc",
+        "/machine/grbl-sim/trace/0",
+    ] {
+        assert!(dump.contains(entity), "bag.rrd has no {entity}");
+    }
     // One Rerun recording for the whole cell, decodable, with every node's entities.
     let rrd = out_dir.path().join("cell.rrd");
     let dump = common::rrd_dump(&rrd);
@@ -163,7 +224,7 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
     }
     // Rerun's own tool, from the PyPI rerun-sdk of the crate's version, accepts every file.
     let python = common::venv_python("rerun-venv", "tests/rerun/requirements.txt", "rerun");
-    let mut files = vec![rrd];
+    let mut files = vec![rrd, out_dir.path().join("bag.rrd")];
     for entry in std::fs::read_dir(out_dir.path().join("rrd")).unwrap() {
         files.push(entry.unwrap().path());
     }

@@ -529,7 +529,7 @@ impl fmt::Display for BagInfo {
 }
 
 /// Size like `ros2 bag info`: B, KiB, MiB, GiB with up to two decimals.
-fn human_size(bytes: u64) -> String {
+pub fn human_size(bytes: u64) -> String {
     let mut value = bytes as f64;
     for unit in ["B", "KiB", "MiB", "GiB"] {
         if value < 1024.0 || unit == "GiB" {

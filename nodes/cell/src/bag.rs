@@ -1,7 +1,9 @@
-//! `cell bag info BAG` and `cell bag repair BAG`: rosbag2 MCAP bags without DDS, through
-//! [`cell_bag`]; `cell bag play BAG`: the bag republished over DDS, through [`cell_replayer`].
+//! `cell bag info BAG`, `cell bag repair BAG` and `cell bag to-rerun BAG`: rosbag2 MCAP bags
+//! without DDS, through [`cell_bag`]; `cell bag play BAG`: the bag republished over DDS, through
+//! [`cell_replayer`].
 //!
 //! - `info` prints topics, types, counts, duration, size and files, like `ros2 bag info`.
+//! - `to-rerun` converts a bag into a Rerun recording (see [`crate::bag_rerun`]).
 //! - `repair` restores a bag whose writer was killed: every file is cut after its last complete
 //!   chunk and rewritten with a summary (the original kept as `*.orig`), and `metadata.yaml` is
 //!   regenerated.
@@ -38,6 +40,10 @@ pub enum BagCommand {
     /// `bag_play`; pause and resume with its `/bag_play/set_paused` service, std_srvs/SetBool).
     /// Ctrl-C stops.
     Play(PlayArgs),
+    /// Convert a bag into a Rerun recording drawn like the live nodes' (toolpaths, heat maps
+    /// and exposure scalars, machine traces, programs; see `cell_cli::bag_rerun`), with a
+    /// summary per topic. Messages of unknown types are counted and skipped.
+    ToRerun(crate::bag_rerun::ToRerunArgs),
 }
 
 /// `cell bag play` options (the replayer node's parameters).
@@ -200,6 +206,7 @@ pub fn run(command: BagCommand) -> ExitCode {
         BagCommand::Info { bag } | BagCommand::Repair { bag } => bag,
         // The replayer names the parameter and the path itself.
         BagCommand::Play(args) => return play(args),
+        BagCommand::ToRerun(args) => &args.bag,
     };
     if !bag.exists() {
         eprintln!(
@@ -208,10 +215,11 @@ pub fn run(command: BagCommand) -> ExitCode {
         );
         return ExitCode::from(cell_runtime::EXIT_USAGE);
     }
-    let result = if let BagCommand::Info { bag } = &command {
-        cell_bag::BagInfo::open(bag).map(|info| print!("{info}"))
-    } else {
-        cell_bag::repair(bag).map(|report| {
+    let result = match &command {
+        BagCommand::Play(args) => return play(args),
+        BagCommand::ToRerun(args) => return crate::bag_rerun::run(args),
+        BagCommand::Info { bag } => cell_bag::BagInfo::open(bag).map(|info| print!("{info}")),
+        BagCommand::Repair { bag } => cell_bag::repair(bag).map(|report| {
             let mut repaired = 0;
             for f in report.repaired() {
                 repaired += 1;
@@ -233,7 +241,7 @@ pub fn run(command: BagCommand) -> ExitCode {
                 );
             }
             println!("wrote {}", report.metadata.display());
-        })
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -4,7 +4,7 @@
 //!   supervises them (see [`cell_launch`]).
 //! - `cell demo` runs the demo cell from `launch_scripts/demo.launch.yaml` (embedded in the
 //!   binary, so it works from any directory): a hot-wire wing planned, emitted and streamed to
-//!   the GRBL simulator; programs and `cell.rrd` in `demo-out/`.
+//!   the GRBL simulator; the program, the bag, `cell.rrd` and `bag.rrd` in `demo-out/`.
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
 //! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
@@ -15,10 +15,12 @@
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
-//! - `cell bag info BAG`, `cell bag repair BAG`: rosbag2 MCAP bags; `cell bag play BAG`
-//!   republishes one over DDS with its recorded timing (see [`bag`]).
+//! - `cell bag info BAG`, `cell bag repair BAG`, `cell bag to-rerun BAG --out FILE.rrd`:
+//!   rosbag2 MCAP bags (see [`bag`] and, for the Rerun conversion, [`bag_rerun`]); `cell bag
+//!   play BAG` republishes one over DDS with its recorded timing.
 
 pub mod bag;
+pub mod bag_rerun;
 pub mod emit;
 pub mod hotwire;
 pub mod rrd;
@@ -72,9 +74,11 @@ enum Command {
     },
     /// Run the demo cell: a hot-wire wing planned, emitted for the 4-axis GRBL cutter and
     /// streamed to the in-repo GRBL simulator, with a summary table at the end. Writes the
-    /// program and `cell.rrd` (every node's Rerun log in one recording) to --out.
+    /// program, the bag of every topic, `cell.rrd` (every node's Rerun log in one recording)
+    /// and `bag.rrd` (the bag drawn) to --out, and lists them last.
     Demo {
-        /// Output directory: the programs, `rrd/<node>.rrd` and the merged `cell.rrd`.
+        /// Output directory: the programs, the bag (`bag/`, drawn into `bag.rrd`),
+        /// `rrd/<node>.rrd` and the merged `cell.rrd`.
         #[arg(long, default_value = "demo-out")]
         out: PathBuf,
         /// Rerun output for every node: `save` (into --out, merged into cell.rrd), `off`,
@@ -104,9 +108,10 @@ enum Command {
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
     /// arguments or controller file, 65 a program the controller refuses.
     Stream(stream::StreamArgs),
-    /// Inspect, repair or play a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag repair BAG`,
-    /// `cell bag play BAG`. Exit status: 64 bad arguments or no such path, 65 a bag that cannot
-    /// be read.
+    /// Inspect, repair, convert or play a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag
+    /// repair BAG`, `cell bag to-rerun BAG --out FILE.rrd`, `cell bag play BAG`. Exit status: 64
+    /// bad arguments, no such path or an output that cannot be written, 65 a bag that cannot be
+    /// read.
     #[command(subcommand)]
     Bag(bag::BagCommand),
     /// Run a node built into `cell` (as launch files do when no separate binary is installed).
@@ -209,18 +214,111 @@ pub fn main(argv: Vec<String>) -> ExitCode {
                 }
             };
             let status = run_launch(source, args, Some(StopOthersWhen::Node(until)));
+            let mut outputs = DemoOutputs::default();
             if merge {
                 let cell_rrd = out.join("cell.rrd");
                 match rrd::merge_dir(&rrd_dir, &cell_rrd) {
-                    Ok(n) => println!(
-                        "cell: {} ({n} Rerun messages from every node)",
-                        cell_rrd.display()
-                    ),
+                    Ok(n) => outputs.rows.push((
+                        "rerun",
+                        format!(
+                            "{} ({n} Rerun messages from every node)",
+                            cell_rrd.display()
+                        ),
+                    )),
                     Err(e) => eprintln!("error: {}: {e:#}", cell_rrd.display()),
                 }
             }
+            // The recorder has finished the bag by now (it stops with the other nodes).
+            if bag.exists() {
+                outputs.add_bag(&bag, &out.join("bag.rrd"), &out);
+            }
+            print!("{outputs}");
             status
         }
+    }
+}
+
+/// The table `cell demo` prints last: what it wrote, one row per file.
+#[derive(Debug, Default)]
+struct DemoOutputs {
+    /// (kind, description) rows.
+    rows: Vec<(&'static str, String)>,
+}
+
+impl DemoOutputs {
+    /// Adds the bag (from its summary), its conversion to `bag_rrd` and the program files the
+    /// bag's `MachineProgram`s name that the emitter wrote into `out`. A bag that cannot be
+    /// read or converted is reported as an error line; the run's status stays the nodes'.
+    fn add_bag(&mut self, bag: &std::path::Path, bag_rrd: &std::path::Path, out: &std::path::Path) {
+        match cell_bag::BagInfo::open(bag) {
+            // First: the bag is the run's record; the rest is drawn from it or beside it.
+            Ok(info) => self.rows.insert(
+                0,
+                (
+                    "bag",
+                    format!(
+                        "{}: {} topics, {} messages, {} (`cell bag info {0}`)",
+                        bag.display(),
+                        info.topics.len(),
+                        info.message_count,
+                        cell_bag::reader::human_size(info.size)
+                    ),
+                ),
+            ),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return;
+            }
+        }
+        let options = bag_rerun::ConvertOptions {
+            // Not the nodes' run id: the bag's entities would merge into theirs in a viewer.
+            recording_id: format!("cell-{}-bag", std::process::id()),
+            progress: false,
+        };
+        match bag_rerun::convert(bag, bag_rrd, &options) {
+            Ok(report) => {
+                self.rows.push((
+                    "rerun",
+                    format!(
+                        "{} (the bag drawn: {} messages converted, {} skipped)",
+                        bag_rrd.display(),
+                        report.converted(),
+                        report.skipped()
+                    ),
+                ));
+                for program in &report.programs {
+                    let path = out.join(&program.file);
+                    if path.is_file() {
+                        self.rows.push((
+                            "program",
+                            format!(
+                                "{} (job {}, {} lines)",
+                                path.display(),
+                                program.job_id,
+                                program.lines
+                            ),
+                        ));
+                    }
+                }
+            }
+            Err(e) => eprintln!("error: {}: {e}", bag_rrd.display()),
+        }
+    }
+}
+
+impl std::fmt::Display for DemoOutputs {
+    /// `cell: outputs` and a table in the style of job_runner's summary.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.rows.is_empty() {
+            return Ok(());
+        }
+        writeln!(f, "cell: outputs")?;
+        writeln!(f, "| output  | file |")?;
+        writeln!(f, "|---------|------|")?;
+        for (kind, text) in &self.rows {
+            writeln!(f, "| {kind:<7} | {text} |")?;
+        }
+        Ok(())
     }
 }
 

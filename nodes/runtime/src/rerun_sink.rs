@@ -26,6 +26,21 @@
 //! [`toolpath_entity`] gives the default path for a `Toolpath` by its process. Timelines:
 //! `ros_time` (the message header stamp) and `frame` (a per-node counter).
 //!
+//! A bag converted by `cell bag to-rerun` (`cell_cli::bag_rerun`) uses the same helpers, so
+//! the toolpath, machine and emitter entities above look as they did live; what a bag adds:
+//!
+//! | entity path                    | what                                    | from             |
+//! |--------------------------------|-----------------------------------------|------------------|
+//! | `<topic>/<frame_id>`           | each `HeatMap` on that topic and frame (e.g. `/cell/exposure/hotwire_root`), as an image over time | [`RerunSink::log_heat_map`] |
+//! | `<topic>/<frame_id>/{max,mean,threshold}` | the heat map's largest and mean value and its threshold (the material CSE for exposure) as scalars, so over-exposure shows as `max` above `threshold` | [`RerunSink::log_heat_map_stats`] |
+//! | `/emitter/log`                 | each `MachineProgram`'s summary line, as the emitter logs it | [`RerunSink::log_text`] |
+//! | `/programs/<job>/<file>`       | each program file's text (a document)   | [`RerunSink::log_text_document`] |
+//! | `<topic>`                      | any other cellsuite message, one JSON text line each | [`RerunSink::log_text`] |
+//!
+//! A converted bag also has the `log_time` timeline: each message's bag log (receive) time,
+//! set by [`RerunSink::set_log_time`]; `ros_time` is the header stamp (the log time for a
+//! message without one) and `frame` the message's index on its topic.
+//!
 //! `save:PATH` may contain `{node}`, replaced by the node name, so several nodes launched with
 //! one setting write separate `.rrd` files. `connect:ADDR` takes `host:port` (the viewer's gRPC
 //! port, 9876 by default) or a full `rerun+http://…/proxy` URL.
@@ -145,6 +160,14 @@ impl RerunSink {
         }
     }
 
+    /// Sets the `log_time` timeline (a timestamp, ns since the epoch): when a bag's recorder
+    /// received the message. Only bag conversion sets it; the live nodes have `ros_time`.
+    pub fn set_log_time(&self, log_time_ns: u64) {
+        if let Some(rec) = &self.stream {
+            rec.set_timestamp_nanos_since_epoch("log_time", log_time_ns as i64);
+        }
+    }
+
     /// Logs a toolpath as line strips, one per segment, coloured by segment kind. Hot-wire tip
     /// (secondary-plane) points go to `<entity>_tip`.
     pub fn log_toolpath(&self, entity: &str, toolpath: &Toolpath) {
@@ -197,6 +220,34 @@ impl RerunSink {
         self.report(rec.log(entity, &image));
     }
 
+    /// Logs a heat map's largest value and the mean of its finite values as the scalars
+    /// `<entity>/max` and `<entity>/mean`, and its threshold as `<entity>/threshold` when it
+    /// has one (not NaN). For an exposure profile the threshold is the material's CSE, so the
+    /// plot shows how far the hottest panel overshoots it while the plan improves. A heat map
+    /// without finite values logs nothing.
+    pub fn log_heat_map_stats(&self, entity: &str, heat: &HeatMap) {
+        let Some(rec) = &self.stream else { return };
+        let Some(stats) = HeatMapStats::of(heat) else {
+            return;
+        };
+        for (name, value) in [("max", stats.max), ("mean", stats.mean)] {
+            self.report(rec.log(format!("{entity}/{name}"), &rerun::Scalars::single(value)));
+        }
+        if heat.threshold.is_finite() {
+            self.report(rec.log(
+                format!("{entity}/threshold"),
+                &rerun::Scalars::single(f64::from(heat.threshold)),
+            ));
+        }
+    }
+
+    /// Logs a whole text (a program file) as a document the viewer shows in a text view.
+    pub fn log_text_document(&self, entity: &str, text: &str) {
+        if let Some(rec) = &self.stream {
+            self.report(rec.log(entity, &rerun::TextDocument::new(text)));
+        }
+    }
+
     /// Logs a line of text (an event the viewer should show in its log panel).
     pub fn log_text(&self, entity: &str, text: &str) {
         if let Some(rec) = &self.stream {
@@ -217,6 +268,33 @@ impl RerunSink {
         if let Err(e) = result {
             tracing::warn!("rerun: {e}");
         }
+    }
+}
+
+/// Largest and mean value of a heat map's finite cells (see [`RerunSink::log_heat_map_stats`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeatMapStats {
+    /// The largest finite value.
+    pub max: f64,
+    /// The mean of the finite values.
+    pub mean: f64,
+}
+
+impl HeatMapStats {
+    /// Statistics over the finite values (NaN marks a cell without data); `None` when there
+    /// are none.
+    pub fn of(heat: &HeatMap) -> Option<Self> {
+        let (mut max, mut sum, mut n) = (f64::NEG_INFINITY, 0.0, 0usize);
+        for v in heat.data.iter().filter(|v| v.is_finite()) {
+            let v = f64::from(*v);
+            max = max.max(v);
+            sum += v;
+            n += 1;
+        }
+        (n > 0).then(|| Self {
+            max,
+            mean: sum / n as f64,
+        })
     }
 }
 
@@ -429,6 +507,26 @@ mod tests {
         assert!(!written(&sink), "3 points are below a chunk");
         logger.flush(&sink);
         assert!(written(&sink), "flush writes the pending points");
+    }
+
+    #[test]
+    fn heat_map_stats_skip_cells_without_data() {
+        let heat = |data: Vec<f32>| HeatMap {
+            width: data.len() as u32,
+            height: 1,
+            data,
+            ..HeatMap::default()
+        };
+        let stats = HeatMapStats::of(&heat(vec![1.0, f32::NAN, 5.0, 0.0])).unwrap();
+        assert_eq!(
+            stats,
+            HeatMapStats {
+                max: 5.0,
+                mean: 2.0
+            }
+        );
+        assert_eq!(HeatMapStats::of(&heat(vec![f32::NAN])), None);
+        assert_eq!(HeatMapStats::of(&heat(vec![])), None);
     }
 
     #[test]
