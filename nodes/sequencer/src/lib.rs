@@ -1,0 +1,16 @@
+//! `cell_sequencer`: the order in which a laser or plasma cutter cuts the contours of a nested
+//! sheet, so that idle travel stays short and the sheet does not overheat (seed 003,
+//! Verkhoturov et al. 2022, "Simulating Thermal Sheet Cutting of Figured Parts"; the
+//! implementer's notes are `seed-notes-sheet-waam.md` §A0–A6).
+//!
+//! - [`problem`]: the sequencing problem every algorithm works on: contours as closed
+//!   polylines, their candidate pierce points, the start point and the [`precedence`] rules.
+//! - [`precedence`]: which contours may be cut next (seed 003 §2, notes §A2/§A4), in strict or
+//!   relaxed mode, and the check of a whole order.
+//!
+//! Everything here is synchronous and free of ROS/DDS.
+
+#![warn(missing_docs)]
+
+pub mod precedence;
+pub mod problem;
