@@ -119,6 +119,12 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
     );
     // 60 iterations for each of the panel's two sections, root and tip.
     assert!(stdout.contains("| plan    | 120 iterations"), "{stdout}");
+    // The demo says its plan is cut short of the paper's.
+    assert!(
+        stdout.contains("planning with 60 PSO iterations per wing section, reduced")
+            && stdout.contains("iterations:=8000"),
+        "{stdout}"
+    );
     let machine = stdout
         .lines()
         .find(|l| l.contains("| machine |"))

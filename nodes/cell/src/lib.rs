@@ -346,6 +346,15 @@ fn run_launch(source: LaunchSource, args: Vec<String>, stop: Option<StopOthersWh
             LaunchFile::parse(DEMO_LAUNCH, "launch_scripts/demo.launch.yaml", &pairs)
         }
     };
+    if let (LaunchSource::Embedded, Ok(f)) = (&source, &file) {
+        if let Some(iterations) = f.args.iter().find(|a| a.name == "iterations") {
+            println!(
+                "cell demo: planning with {} PSO iterations per wing section, reduced so the demo \
+                 takes a minute or two on two cores (seed 000 runs 8000: add iterations:=8000)",
+                iterations.value
+            );
+        }
+    }
     let plan = match file.and_then(|f| f.plan(resolve_exec)) {
         Ok(plan) => plan,
         Err(e) => return fail(&e),
