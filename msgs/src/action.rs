@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{MachineProgram, Toolpath};
+use crate::{CutPlan, MachineProgram, Toolpath};
 
 /// Goal of `PlanHotwire`: plan a hot-wire cut of a (possibly tapered) wing panel (Swarm-Cut
 /// exposure-optimised trajectory with the kerf model).
@@ -126,4 +126,58 @@ pub struct ExecuteProgramFeedback {
     pub state: u8,
     /// Acknowledged share of the program, 0..100.
     pub percent_done: f32,
+}
+
+/// Goal of `SequenceSheet`: order the contours of a nested sheet, choose pierce points,
+/// simulate the heating and improve the order within the connectivity rules (seed 003).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SequenceSheetGoal {
+    /// Job identifier, carried into the CutPlan and the Toolpath.
+    pub job_id: String,
+    /// A layout file the sequencer can read (.dxf or .json), or, if empty, `layout_json`.
+    pub layout_file: String,
+    /// The layout in the sequencer's own JSON format.
+    pub layout_json: String,
+    /// Precedence rules: "strict" or "relaxed"; empty = strict.
+    pub precedence: String,
+    /// Pierce points: "fixed" or "free"; empty = free.
+    pub pierce: String,
+    /// Construction policy: nearest, min_overheat, random, path_overheat; empty = path_overheat.
+    pub policy: String,
+    /// Run the improvement phase after the construction.
+    pub improve: bool,
+    /// Time budget for the improvement phase \[s\]; 0 = the sequencer's default.
+    pub time_budget_s: f64,
+    /// Machine profile under config/machines (cut and rapid speeds, dialect).
+    pub machine_profile: String,
+    /// RNG seed; the same seed gives the same plan.
+    pub seed: u64,
+}
+
+/// Result of `SequenceSheet`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SequenceSheetResult {
+    /// Whether sequencing succeeded.
+    pub success: bool,
+    /// Why it failed (naming the file, entity or field), or a one-line summary on success.
+    pub message: String,
+    /// The cut order and its metrics.
+    pub plan: CutPlan,
+    /// Cut and travel segments with pierce markers, for the emitter.
+    pub toolpath: Toolpath,
+}
+
+/// Feedback of `SequenceSheet`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SequenceSheetFeedback {
+    /// Construction or improvement.
+    pub phase: String,
+    /// Iteration of the phase.
+    pub iteration: u32,
+    /// Cost of the best plan so far.
+    pub best_cost: f64,
+    /// Its idle length \[mm\].
+    pub best_idle_length_mm: f64,
+    /// Its overheats.
+    pub best_overheats: u32,
 }

@@ -26,11 +26,12 @@ mod srv;
 
 pub use action::{
     ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, PlanHotwireFeedback,
-    PlanHotwireGoal, PlanHotwireResult,
+    PlanHotwireGoal, PlanHotwireResult, SequenceSheetFeedback, SequenceSheetGoal,
+    SequenceSheetResult,
 };
 pub use cdr::{from_cdr, to_cdr, CdrError};
 pub use msg::{
-    HeatMap, HeatMapSizeError, MachineCommand, MachineProgram, MachineStatus, ProgramFile,
+    CutPlan, HeatMap, HeatMapSizeError, MachineCommand, MachineProgram, MachineStatus, ProgramFile,
     Toolpath, ToolpathSegment,
 };
 pub use srv::{
@@ -131,6 +132,7 @@ macro_rules! for_each_message {
             $crate::MachineProgram => "cell_msgs/msg/MachineProgram",
             $crate::MachineStatus => "cell_msgs/msg/MachineStatus",
             $crate::MachineCommand => "cell_msgs/msg/MachineCommand",
+            $crate::CutPlan => "cell_msgs/msg/CutPlan",
             $crate::EmitProgramRequest => "cell_msgs/srv/EmitProgram_Request",
             $crate::EmitProgramResponse => "cell_msgs/srv/EmitProgram_Response",
             $crate::SendMachineCommandRequest => "cell_msgs/srv/SendMachineCommand_Request",
@@ -141,6 +143,9 @@ macro_rules! for_each_message {
             $crate::ExecuteProgramGoal => "cell_msgs/action/ExecuteProgram_Goal",
             $crate::ExecuteProgramResult => "cell_msgs/action/ExecuteProgram_Result",
             $crate::ExecuteProgramFeedback => "cell_msgs/action/ExecuteProgram_Feedback",
+            $crate::SequenceSheetGoal => "cell_msgs/action/SequenceSheet_Goal",
+            $crate::SequenceSheetResult => "cell_msgs/action/SequenceSheet_Result",
+            $crate::SequenceSheetFeedback => "cell_msgs/action/SequenceSheet_Feedback",
         }
     };
 }

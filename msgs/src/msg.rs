@@ -416,3 +416,33 @@ mod bulk_tests {
         );
     }
 }
+
+/// The order a nested sheet is cut in (seed 003): what the sequencer's `SequenceSheet` action
+/// returns beside the [`Toolpath`]. Units: millimetres, degrees Celsius above ambient.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct CutPlan {
+    /// Frame and time of the plan.
+    pub header: Header,
+    /// Job this plan belongs to; carried into the Toolpath.
+    pub job_id: String,
+    /// Contours in cut order, as indices into the layout's contour list.
+    pub order: Vec<u32>,
+    /// The part each cut contour belongs to, one per entry of `order`.
+    pub parts: Vec<u32>,
+    /// Where each cut pierces, one per entry of `order` (z = 0).
+    pub pierce_points: Vec<Point>,
+    /// The policy that built the order (nearest, min_overheat, random, path_overheat).
+    pub policy: String,
+    /// Whether the improvement phase ran.
+    pub improved: bool,
+    /// Rapid (idle) travel from the start point through every pierce point and back.
+    pub idle_length_mm: f64,
+    /// Length cut, the sum of the contour perimeters.
+    pub cut_length_mm: f64,
+    /// Pierces and cut segments that started in an overheated cell.
+    pub overheats: u32,
+    /// Hottest cell over the whole simulated cut.
+    pub max_temperature_c: f64,
+    /// The objective: idle length + w · overheats + lead-in penalties.
+    pub cost: f64,
+}

@@ -114,6 +114,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../msg/MachineCommand.msg"),
     ),
     (
+        "cell_msgs/msg/CutPlan",
+        Kind::Msg,
+        include_str!("../msg/CutPlan.msg"),
+    ),
+    (
         "cell_msgs/srv/EmitProgram",
         Kind::Srv,
         include_str!("../srv/EmitProgram.srv"),
@@ -132,6 +137,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         "cell_msgs/action/ExecuteProgram",
         Kind::Action,
         include_str!("../action/ExecuteProgram.action"),
+    ),
+    (
+        "cell_msgs/action/SequenceSheet",
+        Kind::Action,
+        include_str!("../action/SequenceSheet.action"),
     ),
 ];
 
@@ -228,7 +238,7 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        assert_eq!(names.len(), 14 + 3 * 2 + 2 * 3);
+        assert_eq!(names.len(), 15 + 3 * 2 + 3 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));
