@@ -238,19 +238,7 @@ fn a_bag_becomes_a_recording_drawn_like_the_live_nodes() {
     );
 
     // Rerun's own tool (PyPI rerun-sdk of the crate's version) accepts the file.
-    let python = common::venv_python("rerun-venv", "tests/rerun/requirements.txt", "rerun");
-    let verify = Command::new(&python)
-        .args(["-m", "rerun", "rrd", "verify"])
-        .arg(&rrd)
-        .env("RERUN_ANALYTICS", "false")
-        .output()
-        .expect("run rerun");
-    assert!(
-        verify.status.success(),
-        "rerun rrd verify {}: {}",
-        rrd.display(),
-        text(&verify.stderr)
-    );
+    common::rrd_verify(&rrd);
 
     // Without --out, the recording goes beside the bag as BAG.rrd.
     let out = cell(&["bag", "to-rerun", bag.to_str().unwrap()]);

@@ -229,24 +229,12 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         assert!(dump.contains(entity), "cell.rrd has no {entity}");
     }
     // Rerun's own tool, from the PyPI rerun-sdk of the crate's version, accepts every file.
-    let python = common::venv_python("rerun-venv", "tests/rerun/requirements.txt", "rerun");
     let mut files = vec![rrd, out_dir.path().join("bag.rrd")];
     for entry in std::fs::read_dir(out_dir.path().join("rrd")).unwrap() {
         files.push(entry.unwrap().path());
     }
     for file in files {
-        let verify = Command::new(&python)
-            .args(["-m", "rerun", "rrd", "verify"])
-            .arg(&file)
-            .env("RERUN_ANALYTICS", "false")
-            .output()
-            .expect("run rerun");
-        assert!(
-            verify.status.success(),
-            "rerun rrd verify {}: {}",
-            file.display(),
-            text(&verify.stderr)
-        );
+        common::rrd_verify(&file);
     }
 }
 

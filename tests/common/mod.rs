@@ -145,3 +145,21 @@ pub fn rrd_dump(path: &std::path::Path) -> String {
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     format!("{messages:?}")
 }
+
+/// Checks an `.rrd` file with Rerun's own tool, `rerun rrd verify` from the PyPI rerun-sdk of
+/// the crate's version (a venv made on first use); panics with its complaint.
+pub fn rrd_verify(path: &std::path::Path) {
+    let python = venv_python("rerun-venv", "tests/rerun/requirements.txt", "rerun");
+    let verify = std::process::Command::new(&python)
+        .args(["-m", "rerun", "rrd", "verify"])
+        .arg(path)
+        .env("RERUN_ANALYTICS", "false")
+        .output()
+        .expect("run rerun");
+    assert!(
+        verify.status.success(),
+        "rerun rrd verify {}: {}",
+        path.display(),
+        String::from_utf8_lossy(&verify.stderr)
+    );
+}

@@ -591,10 +591,7 @@ impl Replay {
                     }
                     Some(c) = control_rx.recv() => {
                         apply(&mut clock, c, now());
-                        progress.paused = clock.is_paused();
-                        progress.position = clock.position(now());
-                        progress.scheduled_at = None;
-                        observer(&progress);
+                        show_clock(&clock, now(), &mut progress, &mut observer);
                     }
                     feed = feed_rx.recv() => match feed {
                         None => break 'replay,
@@ -634,10 +631,7 @@ impl Replay {
                     }
                     Some(c) = control_rx.recv() => {
                         apply(&mut clock, c, now());
-                        progress.paused = clock.is_paused();
-                        progress.position = clock.position(now());
-                        progress.scheduled_at = None;
-                        observer(&progress);
+                        show_clock(&clock, now(), &mut progress, &mut observer);
                     }
                     _ = wait => break due.unwrap_or_default(),
                 }
@@ -722,6 +716,19 @@ fn apply(clock: &mut ReplayClock, control: Control, now: Duration) {
         tracing::info!("{message}");
     }
     let _ = control.reply.send(message);
+}
+
+/// Tells the observer the clock changed (paused or resumed) between messages.
+fn show_clock(
+    clock: &ReplayClock,
+    now: Duration,
+    progress: &mut Progress,
+    observer: &mut impl FnMut(&Progress),
+) {
+    progress.paused = clock.is_paused();
+    progress.position = clock.position(now);
+    progress.scheduled_at = None;
+    observer(progress);
 }
 
 /// Triggers its signal when dropped (stops the service however `run` ends).
