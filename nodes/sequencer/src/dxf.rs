@@ -1,0 +1,1 @@
+//! DXF input (issue 7).

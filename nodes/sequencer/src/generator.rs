@@ -1,0 +1,1 @@
+//! Layout generator (issue 7).
