@@ -185,8 +185,8 @@ impl ContainmentTree {
             depth[r] = parent[r].map_or(0, |p| depth[p] + 1);
         }
         let mut children = vec![Vec::new(); n];
-        for r in 0..n {
-            if let Some(p) = parent[r] {
+        for (r, p) in parent.iter().enumerate() {
+            if let Some(p) = *p {
                 children[p].push(r);
             }
         }
@@ -201,8 +201,20 @@ impl ContainmentTree {
 /// Axis-aligned bounding box `[xmin, ymin, xmax, ymax]`.
 pub fn bbox(points: &[Point]) -> [f64; 4] {
     points.iter().fold(
-        [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
-        |b, p| [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])],
+        [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ],
+        |b, p| {
+            [
+                b[0].min(p[0]),
+                b[1].min(p[1]),
+                b[2].max(p[0]),
+                b[3].max(p[1]),
+            ]
+        },
     )
 }
 
@@ -250,7 +262,10 @@ mod tests {
         );
         let out = square(95.0, 0.0, 10.0);
         let e = check_ring("part 1 hole 0", &out, sheet).unwrap_err();
-        assert!(e.to_string().starts_with("part 1 hole 0: point (105.000"), "{e}");
+        assert!(
+            e.to_string().starts_with("part 1 hole 0: point (105.000"),
+            "{e}"
+        );
         let line = vec![[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]];
         assert!(matches!(
             check_ring("x", &line, sheet),
@@ -262,7 +277,10 @@ mod tests {
     #[test]
     fn area_and_dedup() {
         assert_eq!(signed_area(&square(0.0, 0.0, 2.0)), 4.0);
-        let r = dedup_ring(&[[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 0.0]], 1e-9);
+        let r = dedup_ring(
+            &[[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 0.0]],
+            1e-9,
+        );
         assert_eq!(r, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]);
     }
 }

@@ -70,7 +70,11 @@ pub struct EntityRef {
 
 impl std::fmt::Display for EntityRef {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} #{} on layer '{}'", self.kind, self.handle, self.layer)
+        write!(
+            f,
+            "{} #{} on layer '{}'",
+            self.kind, self.handle, self.layer
+        )
     }
 }
 
@@ -170,13 +174,19 @@ impl Piece {
 }
 
 /// Chains open pieces into closed ones by joining endpoints within `tol_mm` (issue 7). Closed
-/// input pieces pass through.
+/// input pieces pass through; straight two-point pieces no longer than `tol_mm` are dropped.
 ///
 /// # Errors
 /// The first chain that cannot close, with the end that found no partner.
 pub fn chain_pieces(pieces: Vec<Piece>, tol_mm: f64) -> Result<Vec<Piece>, (Piece, Point)> {
     let tol = tol_mm.max(1e-12);
-    let (mut closed, open): (Vec<Piece>, Vec<Piece>) = pieces.into_iter().partition(|p| p.closed);
+    let (mut closed, mut open): (Vec<Piece>, Vec<Piece>) =
+        pieces.into_iter().partition(|p| p.closed);
+    // A straight piece no longer than the tolerance joins both its neighbours' ends at once
+    // and would strand itself; it carries no geometry at this tolerance, so it is dropped.
+    open.retain(|p| {
+        p.vertices.len() > 2 || p.vertices[0][2] != 0.0 || distance(p.first(), p.last()) > tol
+    });
     let key = |p: Point| ((p[0] / tol).floor() as i64, (p[1] / tol).floor() as i64);
     let mut index: HashMap<(i64, i64), Vec<(usize, bool)>> = HashMap::new();
     for (i, p) in open.iter().enumerate() {
@@ -193,7 +203,11 @@ pub fn chain_pieces(pieces: Vec<Piece>, tol_mm: f64) -> Result<Vec<Piece>, (Piec
                     if used[j] {
                         continue;
                     }
-                    let q = if is_end { open[j].last() } else { open[j].first() };
+                    let q = if is_end {
+                        open[j].last()
+                    } else {
+                        open[j].first()
+                    };
                     let d = distance(at, q);
                     if d <= tol && best.is_none_or(|(bd, bj, _)| (d, j) < (bd, bj)) {
                         best = Some((d, j, is_end));
@@ -221,7 +235,11 @@ pub fn chain_pieces(pieces: Vec<Piece>, tol_mm: f64) -> Result<Vec<Piece>, (Piec
                 return Err((chain, end));
             };
             used[j] = true;
-            let next = if at_end { open[j].reversed() } else { open[j].clone() };
+            let next = if at_end {
+                open[j].reversed()
+            } else {
+                open[j].clone()
+            };
             let last = chain.vertices.len() - 1;
             chain.vertices[last][2] = next.vertices[0][2];
             chain.vertices.extend_from_slice(&next.vertices[1..]);
@@ -280,16 +298,13 @@ pub fn layout_from_drawing(
             pieces.push(p);
         }
     }
-    // Zero-length open pieces would join anything; drop them.
-    pieces.retain(|p| p.closed || p.vertices.len() > 2 || distance(p.first(), p.last()) > 0.0);
-    let closed = chain_pieces(pieces, opt.join_tol_mm).map_err(|(chain, end)| {
-        DxfError::OpenChain {
+    let closed =
+        chain_pieces(pieces, opt.join_tol_mm).map_err(|(chain, end)| DxfError::OpenChain {
             path: name.into(),
             entities: chain.sources,
             end,
             tol_mm: opt.join_tol_mm,
-        }
-    })?;
+        })?;
     let mut rings = Vec::new();
     let mut names = Vec::new();
     let mut sheet_box = None;
@@ -362,7 +377,11 @@ fn entity_piece(e: &Entity) -> Option<Piece> {
                 (vec![[p0[0], p0[1], b], [q[0], q[1], b]], true, "ARC")
             } else {
                 let bulge = m * (sweep / 4.0).tan();
-                (vec![[p0[0], p0[1], bulge], [p1[0], p1[1], 0.0]], false, "ARC")
+                (
+                    vec![[p0[0], p0[1], bulge], [p1[0], p1[1], 0.0]],
+                    false,
+                    "ARC",
+                )
             }
         }
         EntityType::Circle(c) => {
@@ -443,11 +462,8 @@ mod tests {
         let r = p.reversed();
         assert_eq!(r.vertices, vec![[2.0, 0.0, -1.0], [0.0, 0.0, 0.0]]);
         // Two half circles make a circle of radius 1 whatever their direction.
-        let circle = chain_pieces(
-            vec![p, seg([0.0, 0.0], [2.0, 0.0], -1.0).reversed()],
-            1e-9,
-        )
-        .unwrap();
+        let circle =
+            chain_pieces(vec![p, seg([0.0, 0.0], [2.0, 0.0], -1.0).reversed()], 1e-9).unwrap();
         let pts = flatten(&circle[0], 0.001);
         let area = crate::containment::signed_area(&pts).abs();
         assert!((area - std::f64::consts::PI).abs() < 0.01, "area {area}");

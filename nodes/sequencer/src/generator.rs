@@ -65,7 +65,9 @@ pub fn generate(cfg: &GeneratorConfig) -> Layout {
     // Roughly 2.2 contours per part, mean footprint ((lo+hi)/2 + gap)²: a 2:1 sheet.
     let mean = (lo + hi) / 2.0 + gap;
     let parts_est = (cfg.contours as f64 / 2.2).max(1.0);
-    let width = ((parts_est * mean * mean * 2.0).sqrt()).max(hi + 2.0 * gap).round();
+    let width = ((parts_est * mean * mean * 2.0).sqrt())
+        .max(hi + 2.0 * gap)
+        .round();
     let mut parts: Vec<Part> = Vec::new();
     let mut count = 0;
     let (mut x, mut y, mut row_h) = (gap, gap, 0.0_f64);
@@ -212,9 +214,13 @@ fn star_polygon(rng: &mut ChaCha8Rng, o: Point, s: [f64; 2]) -> Vec<Point> {
     let phase = rng.random_range(0.0..std::f64::consts::TAU);
     (0..n)
         .map(|k| {
-            let a = phase + (k as f64 + rng.random_range(-0.2..0.2)) / n as f64 * std::f64::consts::TAU;
+            let a =
+                phase + (k as f64 + rng.random_range(-0.2..0.2)) / n as f64 * std::f64::consts::TAU;
             let f = rng.random_range(0.85..1.0);
-            [c[0] + f * s[0] / 2.0 * a.cos(), c[1] + f * s[1] / 2.0 * a.sin()]
+            [
+                c[0] + f * s[0] / 2.0 * a.cos(),
+                c[1] + f * s[1] / 2.0 * a.sin(),
+            ]
         })
         .collect()
 }
@@ -236,7 +242,10 @@ mod tests {
         assert_eq!(a.to_json(), generate(&cfg).to_json());
         assert!(a.contour_count() >= 300 && a.contour_count() < 320);
         let n = a.nesting().unwrap();
-        assert!(n.host.iter().any(Option::is_some), "some part is nested in a hole");
+        assert!(
+            n.host.iter().any(Option::is_some),
+            "some part is nested in a hole"
+        );
         a.to_problem(PrecedenceMode::Strict, &PierceOptions::default())
             .unwrap();
     }

@@ -246,24 +246,24 @@ impl Layout {
         let tree = ContainmentTree::build(&rings);
         let mut part_of = vec![usize::MAX; rings.len()];
         let mut parts = Vec::new();
-        for r in 0..rings.len() {
-            if tree.depth[r] % 2 == 0 {
+        for (r, ring) in rings.iter().enumerate() {
+            if tree.depth[r].is_multiple_of(2) {
                 part_of[r] = parts.len();
                 parts.push(Part {
                     name: names.get(r).cloned(),
                     outer: Ring {
-                        points: rings[r].clone(),
+                        points: ring.clone(),
                         pierce: None,
                     },
                     holes: Vec::new(),
                 });
             }
         }
-        for r in 0..rings.len() {
-            if tree.depth[r] % 2 == 1 {
+        for (r, ring) in rings.iter().enumerate() {
+            if !tree.depth[r].is_multiple_of(2) {
                 let host = tree.parent[r].expect("odd depth has a parent");
                 parts[part_of[host]].holes.push(Ring {
-                    points: rings[r].clone(),
+                    points: ring.clone(),
                     pierce: None,
                 });
             }
@@ -289,8 +289,11 @@ impl Layout {
         let tree = ContainmentTree::build(&rings);
         let n = self.parts.len();
         let mut host = vec![None; n];
-        let mut inside: Vec<Vec<Vec<usize>>> =
-            self.parts.iter().map(|p| vec![Vec::new(); p.holes.len()]).collect();
+        let mut inside: Vec<Vec<Vec<usize>>> = self
+            .parts
+            .iter()
+            .map(|p| vec![Vec::new(); p.holes.len()])
+            .collect();
         let mut depth = vec![0; n];
         for (r, &(part, hole)) in owner.iter().enumerate() {
             let parent = tree.parent[r].map(|p| owner[p]);
@@ -350,8 +353,12 @@ impl Layout {
         let nesting = self.nesting()?;
         let mut contours = Vec::with_capacity(self.contour_count());
         for (i, part) in self.parts.iter().enumerate() {
-            let rings = std::iter::once((&part.outer, ContourRole::Outer, None))
-                .chain(part.holes.iter().enumerate().map(|(h, r)| (r, ContourRole::Hole, Some(h))));
+            let rings = std::iter::once((&part.outer, ContourRole::Outer, None)).chain(
+                part.holes
+                    .iter()
+                    .enumerate()
+                    .map(|(h, r)| (r, ContourRole::Hole, Some(h))),
+            );
             for (ring, role, hole) in rings {
                 let points = dedup_ring(&ring.points, 1e-9);
                 let pierce_candidates = match ring.pierce {
@@ -397,7 +404,7 @@ impl Layout {
         ids
     }
 
-    fn flat_rings(&self) -> (Vec<Vec<Point>>, Vec<(usize, Option<usize>)>) {
+    fn flat_rings(&self) -> (Vec<Vec<Point>>, Vec<RingOwner>) {
         let mut rings = Vec::with_capacity(self.contour_count());
         let mut owner = Vec::with_capacity(self.contour_count());
         for (i, p) in self.parts.iter().enumerate() {
@@ -411,7 +418,7 @@ impl Layout {
         (rings, owner)
     }
 
-    fn ring_name(&self, (part, hole): (usize, Option<usize>)) -> String {
+    fn ring_name(&self, (part, hole): RingOwner) -> String {
         let named = match &self.parts[part].name {
             Some(n) => format!("parts[{part}] ({n})"),
             None => format!("parts[{part}]"),
@@ -430,6 +437,9 @@ fn check_sheet(sheet: [f64; 2]) -> Result<(), LayoutError> {
         Err(LayoutError::Sheet(sheet))
     }
 }
+
+/// `(part, None)` for a part's outer contour, `(part, Some(hole))` for a hole.
+type RingOwner = (usize, Option<usize>);
 
 /// The precedence rules from the containment tree (seed 003 §2; notes §A2, §A4), with contours
 /// numbered as in [`Layout::to_problem`].
@@ -490,7 +500,9 @@ pub fn free_pierce_candidates(points: &[Point], opt: &PierceOptions) -> Vec<Poin
     if n < 3 {
         return vec![points[0]];
     }
-    let edge_len: Vec<f64> = (0..n).map(|i| distance(points[i], points[(i + 1) % n])).collect();
+    let edge_len: Vec<f64> = (0..n)
+        .map(|i| distance(points[i], points[(i + 1) % n]))
+        .collect();
     let total: f64 = edge_len.iter().sum();
     if total <= 0.0 {
         return vec![points[0]];
@@ -505,7 +517,9 @@ pub fn free_pierce_candidates(points: &[Point], opt: &PierceOptions) -> Vec<Poin
         .filter(|&i| {
             let (p, q, r) = (points[(i + n - 1) % n], points[i], points[(i + 1) % n]);
             let (u, v) = ([q[0] - p[0], q[1] - p[1]], [r[0] - q[0], r[1] - q[1]]);
-            let turn = (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1]).abs();
+            let turn = (u[0] * v[1] - u[1] * v[0])
+                .atan2(u[0] * v[0] + u[1] * v[1])
+                .abs();
             turn > limit
         })
         .map(|i| at[i])
@@ -536,7 +550,8 @@ pub fn free_pierce_candidates(points: &[Point], opt: &PierceOptions) -> Vec<Poin
         let (p, q) = (points[i], points[(i + 1) % n]);
         return vec![[(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0]];
     }
-    let k = ((free_len / opt.spacing_mm.max(1e-9)).ceil() as usize).clamp(1, opt.max_candidates.max(1));
+    let k =
+        ((free_len / opt.spacing_mm.max(1e-9)).ceil() as usize).clamp(1, opt.max_candidates.max(1));
     let mut out = Vec::with_capacity(k);
     for j in 0..k {
         let mut want = (j as f64 + 0.5) * free_len / k as f64;
@@ -591,7 +606,10 @@ mod tests {
                 Part {
                     name: Some("D1".into()),
                     outer: rect(10.0, 10.0, 250.0, 180.0),
-                    holes: vec![rect(20.0, 20.0, 150.0, 150.0), rect(200.0, 20.0, 40.0, 40.0)],
+                    holes: vec![
+                        rect(20.0, 20.0, 150.0, 150.0),
+                        rect(200.0, 20.0, 40.0, 40.0),
+                    ],
                 },
                 Part {
                     name: Some("D2".into()),
@@ -622,7 +640,9 @@ mod tests {
     #[test]
     fn paper_pseudo_code_w_sequence() {
         let l = paper_example();
-        let p = l.to_problem(PrecedenceMode::Relaxed, &PierceOptions::default()).unwrap();
+        let p = l
+            .to_problem(PrecedenceMode::Relaxed, &PierceOptions::default())
+            .unwrap();
         // GenerateW: C_13 (2), C_22 (4), C_31 (5). Cutting C_13 leaves C_11 waiting on C_12;
         // cutting C_22 frees C_21 (3); cutting C_21 empties IN C_12, so C_12 (1) joins W; then
         // C_11 (0) once both holes are cut.
@@ -638,11 +658,20 @@ mod tests {
             ],
             "seed 003 §A4 GenerateW / CutAndUpdate"
         );
-        let s = l.to_problem(PrecedenceMode::Strict, &PierceOptions::default()).unwrap();
+        let s = l
+            .to_problem(PrecedenceMode::Strict, &PierceOptions::default())
+            .unwrap();
         // Strict: D2 (its hole, then its outer) before any hole of D1; each part contiguous.
         assert_eq!(
             w_sequence(&s.precedence),
-            vec![vec![4, 5], vec![3], vec![1, 2, 5], vec![2], vec![0], vec![5]],
+            vec![
+                vec![4, 5],
+                vec![3],
+                vec![1, 2, 5],
+                vec![2],
+                vec![0],
+                vec![5]
+            ],
             "seed 003 §2: Q_k1 < min_l Q_il, contiguous parts"
         );
         assert_eq!(p.contours[1].role, ContourRole::Hole);
@@ -663,10 +692,17 @@ mod tests {
         let back = Layout::from_json_str(&l.to_json(), "x").unwrap();
         assert_eq!(back, l);
         let bad = r#"{"sheet":[10,10],"parts":[{"outer":{"points":[[0,0],[1,"a"]]}}]}"#;
-        let e = Layout::from_json_str(bad, "bad.json").unwrap_err().to_string();
-        assert!(e.contains("bad.json: at `parts[0].outer.points[1][1]`"), "{e}");
+        let e = Layout::from_json_str(bad, "bad.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bad.json: at `parts[0].outer.points[1][1]`"),
+            "{e}"
+        );
         let typo = r#"{"sheet":[10,10],"parts":[{"outer":{"points":[], "pierse":[0,0]}}]}"#;
-        let e = Layout::from_json_str(typo, "t.json").unwrap_err().to_string();
+        let e = Layout::from_json_str(typo, "t.json")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("pierse"), "{e}");
     }
 
@@ -675,7 +711,10 @@ mod tests {
         let mut l = paper_example();
         l.parts[2].holes.push(rect(0.5, 0.5, 3.0, 3.0));
         let e = l.nesting().unwrap_err().to_string();
-        assert!(e.starts_with("parts[2] (D3).holes[0]: the hole is not inside"), "{e}");
+        assert!(
+            e.starts_with("parts[2] (D3).holes[0]: the hole is not inside"),
+            "{e}"
+        );
         let mut l = paper_example();
         l.parts[2].outer = rect(215.0, 100.0, 10.0, 10.0); // in D1's material
         let e = l.nesting().unwrap_err().to_string();
