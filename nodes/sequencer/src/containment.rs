@@ -11,10 +11,9 @@
 //! an outer contour, odd depth a hole.
 //!
 //! **Degenerate cases.** Fewer than 3 distinct points, zero area, a self-intersection or a
-//! vertex outside the sheet `[0, a] × [0, b]` is an error naming the ring. Two rings that cross
-//! each other are not detected here (the tree assumes a nesting, as the paper does); a ring
-//! touching another only at a vertex gets whichever parent the winding test of its first vertex
-//! decides.
+//! vertex outside the sheet `[0, a] × [0, b]` is an error naming the ring ([`check_ring`]).
+//! Rings that cross or touch each other are found by [`find_crossing`]; the layout code rejects
+//! them before building the tree, which assumes disjoint, nested rings (as the paper does).
 
 use cavalier_contours::core::math::Vector2;
 use cavalier_contours::polyline::{PlineCreation, PlineSource, PlineSourceMut, Polyline};
@@ -53,6 +52,14 @@ pub enum GeometryError {
         a: f64,
         /// Sheet height, mm.
         b: f64,
+    },
+    /// Two contours cross or touch (seed 003 §A1 assumes disjoint, nested contours).
+    #[error("{ring} crosses or touches {other}")]
+    Crossing {
+        /// One ring.
+        ring: String,
+        /// The other ring.
+        other: String,
     },
     /// A coordinate is NaN or infinite.
     #[error("{ring}: non-finite coordinate")]
@@ -198,6 +205,34 @@ impl ContainmentTree {
     }
 }
 
+/// Finds the first pair of rings that cross or touch (seed 003 §A1: contours are disjoint),
+/// comparing only rings whose bounding boxes overlap (sort and sweep along x) with
+/// cavalier_contours' polyline intersection; `None` if the rings are pairwise disjoint.
+///
+/// Cost: O(n log n) plus one intersection query per overlapping box pair (in a nested layout:
+/// about one per ring, parent and child).
+pub fn find_crossing(rings: &[Vec<Point>]) -> Option<(usize, usize)> {
+    let boxes: Vec<[f64; 4]> = rings.iter().map(|r| bbox(r)).collect();
+    let plines: Vec<Polyline<f64>> = rings.iter().map(|r| to_pline(r)).collect();
+    let mut by_x: Vec<usize> = (0..rings.len()).collect();
+    by_x.sort_by(|&i, &j| boxes[i][0].total_cmp(&boxes[j][0]).then(i.cmp(&j)));
+    let mut active: Vec<usize> = Vec::new();
+    for &r in &by_x {
+        active.retain(|&a| boxes[a][2] >= boxes[r][0]);
+        for &a in &active {
+            let overlap_y = boxes[a][1] <= boxes[r][3] && boxes[r][1] <= boxes[a][3];
+            if overlap_y {
+                let hits = plines[a].find_intersects(&plines[r]);
+                if !hits.basic_intersects.is_empty() || !hits.overlapping_intersects.is_empty() {
+                    return Some((a.min(r), a.max(r)));
+                }
+            }
+        }
+        active.push(r);
+    }
+    None
+}
+
 /// Axis-aligned bounding box `[xmin, ymin, xmax, ymax]`.
 pub fn bbox(points: &[Point]) -> [f64; 4] {
     points.iter().fold(
@@ -272,6 +307,20 @@ mod tests {
             Err(GeometryError::Degenerate { .. })
         ));
         assert!(check_ring("ok", &square(0.0, 0.0, 100.0), sheet).is_ok());
+    }
+
+    #[test]
+    fn crossings_are_found() {
+        let rings = vec![
+            square(0.0, 0.0, 100.0),
+            square(10.0, 10.0, 10.0),
+            square(50.0, 50.0, 10.0),
+        ];
+        assert_eq!(find_crossing(&rings), None);
+        let rings = vec![square(0.0, 0.0, 100.0), square(90.0, 10.0, 20.0)];
+        assert_eq!(find_crossing(&rings), Some((0, 1)));
+        let rings = vec![square(0.0, 0.0, 10.0), square(10.0, 0.0, 10.0)];
+        assert_eq!(find_crossing(&rings), Some((0, 1)), "shared edge");
     }
 
     #[test]

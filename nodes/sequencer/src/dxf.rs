@@ -277,6 +277,26 @@ pub fn read_dxf(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfE
     layout_from_drawing(&drawing, &name, opt)
 }
 
+/// Reads a layout from a `.dxf` file ([`read_dxf`]) or, for any other extension, from the
+/// JSON format ([`Layout::from_json_file`]) (issue 7: `--layout FILE.dxf|json`).
+///
+/// # Errors
+/// [`DxfError`]; JSON errors come as [`DxfError::Layout`].
+pub fn read_layout(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfError> {
+    let path = path.as_ref();
+    let is_dxf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dxf"));
+    if is_dxf {
+        read_dxf(path, opt)
+    } else {
+        Layout::from_json_file(path).map_err(|source| DxfError::Layout {
+            path: path.display().to_string(),
+            source,
+        })
+    }
+}
+
 /// Converts a loaded drawing into a [`Layout`]; `name` names the source in errors.
 ///
 /// # Errors
@@ -398,6 +418,8 @@ fn entity_piece(e: &Entity) -> Option<Piece> {
                 .collect();
             (v, p.is_closed(), "LWPOLYLINE")
         }
+        // Polyface and polygon meshes (flags 16, 64) are surfaces, not contours.
+        EntityType::Polyline(p) if p.flags & (16 | 64) != 0 => return None,
         EntityType::Polyline(p) => {
             let m = mirror(p.normal.z);
             let v = p
@@ -453,6 +475,37 @@ mod tests {
         assert_eq!(closed[0].sources.len(), 4);
         let open = chain_pieces(vec![seg([0.0, 0.0], [1.0, 0.0], 0.0)], 0.01).unwrap_err();
         assert_eq!(open.1, [1.0, 0.0]);
+    }
+
+    #[test]
+    fn self_intersecting_entity_is_named() {
+        use dxf::entities::LwPolyline;
+        use dxf::LwPolylineVertex;
+        let mut d = Drawing::new();
+        let mut lw = LwPolyline::default();
+        for (x, y) in [(0.0, 0.0), (10.0, 10.0), (10.0, 0.0), (0.0, 4.0)] {
+            lw.vertices.push(LwPolylineVertex {
+                x,
+                y,
+                ..Default::default()
+            });
+        }
+        lw.set_is_closed(true);
+        let mut e = Entity::new(EntityType::LwPolyline(lw));
+        e.common.layer = "BAD".into();
+        d.add_entity(e);
+        let opt = DxfOptions {
+            sheet: Some([20.0, 20.0]),
+            ..Default::default()
+        };
+        let err = layout_from_drawing(&d, "bow.dxf", &opt)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("bow.dxf: LWPOLYLINE #")
+                && err.ends_with("on layer 'BAD': the contour intersects itself"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -35,7 +35,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::containment::{check_ring, dedup_ring, ContainmentTree, GeometryError};
+use crate::containment::{check_ring, dedup_ring, find_crossing, ContainmentTree, GeometryError};
 use crate::precedence::{Precedence, PrecedenceMode, Violation};
 use crate::problem::{distance, Contour, ContourId, ContourRole, Point, Problem};
 
@@ -230,7 +230,8 @@ impl Layout {
     /// Parts are numbered in the order of their outer rings; holes in ring order.
     ///
     /// # Errors
-    /// [`LayoutError::Geometry`] for a degenerate, self-intersecting or off-sheet ring.
+    /// [`LayoutError::Geometry`] for a degenerate, self-intersecting or off-sheet ring, or two
+    /// rings that cross.
     pub fn from_rings(
         sheet: [f64; 2],
         start: Point,
@@ -239,9 +240,16 @@ impl Layout {
     ) -> Result<Self, LayoutError> {
         check_sheet(sheet)?;
         let rings: Vec<Vec<Point>> = rings.iter().map(|r| dedup_ring(r, 1e-9)).collect();
+        let name = |r: usize| names.get(r).cloned().unwrap_or_else(|| format!("ring {r}"));
         for (r, ring) in rings.iter().enumerate() {
-            let name = names.get(r).cloned().unwrap_or_else(|| format!("ring {r}"));
-            check_ring(&name, ring, sheet)?;
+            check_ring(&name(r), ring, sheet)?;
+        }
+        if let Some((r, o)) = find_crossing(&rings) {
+            return Err(GeometryError::Crossing {
+                ring: name(r),
+                other: name(o),
+            }
+            .into());
         }
         let tree = ContainmentTree::build(&rings);
         let mut part_of = vec![usize::MAX; rings.len()];
@@ -278,13 +286,21 @@ impl Layout {
     /// Checks every contour and resolves the nesting (the paper's `IN` sets, seed 003 §A4).
     ///
     /// # Errors
-    /// [`LayoutError::Geometry`] for a bad contour, [`LayoutError::Nesting`] when the
+    /// [`LayoutError::Geometry`] for a bad contour or two contours that cross,
+    /// [`LayoutError::Nesting`] when the
     /// containment tree contradicts the declared parts.
     pub fn nesting(&self) -> Result<Nesting, LayoutError> {
         check_sheet(self.sheet)?;
         let (rings, owner) = self.flat_rings();
         for (r, ring) in rings.iter().enumerate() {
             check_ring(&self.ring_name(owner[r]), ring, self.sheet)?;
+        }
+        if let Some((r, o)) = find_crossing(&rings) {
+            return Err(GeometryError::Crossing {
+                ring: self.ring_name(owner[r]),
+                other: self.ring_name(owner[o]),
+            }
+            .into());
         }
         let tree = ContainmentTree::build(&rings);
         let n = self.parts.len();
@@ -719,6 +735,13 @@ mod tests {
         l.parts[2].outer = rect(215.0, 100.0, 10.0, 10.0); // in D1's material
         let e = l.nesting().unwrap_err().to_string();
         assert!(e.contains("parts overlap"), "{e}");
+        let mut l = paper_example();
+        l.parts[2].outer = rect(250.0, 100.0, 30.0, 30.0); // straddles D1's outer edge
+        let e = l.nesting().unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "parts[0] (D1).outer crosses or touches parts[2] (D3).outer"
+        );
         let mut l = paper_example();
         l.parts[2].outer = rect(390.0, 20.0, 50.0, 50.0);
         let e = l.nesting().unwrap_err().to_string();
