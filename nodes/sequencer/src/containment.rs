@@ -72,7 +72,7 @@ pub enum GeometryError {
 /// Tolerance for "on the sheet edge", mm.
 const SHEET_EPS_MM: f64 = 1e-6;
 
-/// A closed polyline (no bulges) as a cavalier_contours polyline.
+/// A closed polyline (no bulges) as a cavalier_contours polyline (a contour `C_ij`, seed 003 §A1).
 pub fn to_pline(points: &[Point]) -> Polyline<f64> {
     let mut p = Polyline::with_capacity(points.len(), true);
     for q in points {
@@ -81,7 +81,8 @@ pub fn to_pline(points: &[Point]) -> Polyline<f64> {
     p
 }
 
-/// Signed area of a closed polyline by the shoelace formula, mm² (positive = counter-clockwise).
+/// Signed area of a closed polyline by the shoelace formula, mm² (positive = counter-clockwise;
+/// used to order rings for the containment tree, seed 003 §A1, notes §A6).
 pub fn signed_area(points: &[Point]) -> f64 {
     let n = points.len();
     (0..n)
@@ -94,7 +95,7 @@ pub fn signed_area(points: &[Point]) -> f64 {
 }
 
 /// Removes consecutive duplicate points (within `eps_mm`), including a repeated first point at
-/// the end.
+/// the end, so a contour `C_ij` (seed 003 §A1) is a closed polyline without repeats.
 pub fn dedup_ring(points: &[Point], eps_mm: f64) -> Vec<Point> {
     let mut out: Vec<Point> = Vec::with_capacity(points.len());
     for &p in points {
@@ -111,7 +112,8 @@ pub fn dedup_ring(points: &[Point], eps_mm: f64) -> Vec<Point> {
     out
 }
 
-/// Checks one ring: finite, ≥ 3 distinct points, non-zero area, simple, inside the sheet.
+/// Checks one ring: finite, ≥ 3 distinct points, non-zero area, simple, inside the sheet
+/// `L(a×b)` (seed 003 §A1; issue 7: self-intersecting contours are errors).
 ///
 /// # Errors
 /// The first [`GeometryError`] found, carrying `name`.
@@ -159,7 +161,8 @@ pub struct ContainmentTree {
 }
 
 impl ContainmentTree {
-    /// Builds the tree for rings that are already checked ([`check_ring`]).
+    /// Builds the tree for rings that are already checked ([`check_ring`]) (seed 003 §A1;
+    /// notes §A6: point-in-polygon containment).
     ///
     /// Cost: O(n log n) for the sort plus, per ring, a bounding-box scan over larger rings and a
     /// winding-number test for each box that contains it.
@@ -233,7 +236,8 @@ pub fn find_crossing(rings: &[Vec<Point>]) -> Option<(usize, usize)> {
     None
 }
 
-/// Axis-aligned bounding box `[xmin, ymin, xmax, ymax]`.
+/// Axis-aligned bounding box `[xmin, ymin, xmax, ymax]` of a contour (seed 003 §A1), mm;
+/// infinite (empty) for no points.
 pub fn bbox(points: &[Point]) -> [f64; 4] {
     points.iter().fold(
         [
@@ -257,7 +261,8 @@ fn box_contains(outer: [f64; 4], inner: [f64; 4]) -> bool {
     outer[0] <= inner[0] && outer[1] <= inner[1] && outer[2] >= inner[2] && outer[3] >= inner[3]
 }
 
-/// Whether `p` lies inside the closed ring (non-zero winding number; cavalier_contours).
+/// Whether `p` lies inside the closed ring (non-zero winding number; cavalier_contours): the
+/// point-in-polygon test of notes §A6 (seed 003). Points on the boundary are unspecified.
 pub fn ring_contains(points: &[Point], p: Point) -> bool {
     to_pline(points).winding_number(Vector2::new(p[0], p[1])) != 0
 }

@@ -57,7 +57,7 @@ impl Default for DxfOptions {
     }
 }
 
-/// One source entity, for error messages.
+/// One source entity of a contour (issue 7: errors name the entity), for error messages.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EntityRef {
     /// `LINE`, `ARC`, `CIRCLE`, `LWPOLYLINE`, `POLYLINE`, or `SEGMENT` for other sources.
@@ -129,7 +129,8 @@ pub enum DxfError {
     },
 }
 
-/// A run of polyline vertices `(x, y, bulge)` from its sources; in an open piece the last
+/// A run of polyline vertices `(x, y, bulge)` from its sources (a piece of a contour `C_ij`,
+/// seed 003 §A1; issue 7 chaining); in an open piece the last
 /// bulge is unused, in a closed one it is the closing segment's.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Piece {
@@ -249,7 +250,8 @@ pub fn chain_pieces(pieces: Vec<Piece>, tol_mm: f64) -> Result<Vec<Piece>, (Piec
     Ok(closed)
 }
 
-/// Flattens a closed piece's arcs to chords within `chord_tol_mm` (cavalier_contours).
+/// Flattens a closed piece's arcs to chords within `chord_tol_mm` (cavalier_contours), giving
+/// the polyline contour `C_ij` of seed 003 §A1 (issue 7: arcs flattened to a chord tolerance).
 pub fn flatten(piece: &Piece, chord_tol_mm: f64) -> Vec<Point> {
     let mut p: Polyline<f64> = Polyline::with_capacity(piece.vertices.len(), true);
     for v in &piece.vertices {
@@ -263,7 +265,7 @@ pub fn flatten(piece: &Piece, chord_tol_mm: f64) -> Vec<Point> {
     lines.iter_vertexes().map(|v| [v.x, v.y]).collect()
 }
 
-/// Reads a DXF file into a [`Layout`] (module docs).
+/// Reads a DXF file into a [`Layout`] (module docs; issue 7, seed 003 §A1).
 ///
 /// # Errors
 /// [`DxfError`], naming the file and, where it applies, the entities.
@@ -297,7 +299,8 @@ pub fn read_layout(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, D
     }
 }
 
-/// Converts a loaded drawing into a [`Layout`]; `name` names the source in errors.
+/// Converts a loaded drawing into a [`Layout`] (issue 7, seed 003 §A1); `name` names the
+/// source in errors.
 ///
 /// # Errors
 /// As [`read_dxf`].

@@ -54,7 +54,8 @@ impl Default for GeneratorConfig {
     }
 }
 
-/// Generates a layout (module docs).
+/// Generates a layout (module docs; issue 7 instances for seed 003, whose own test nest §A5 is
+/// not published).
 pub fn generate(cfg: &GeneratorConfig) -> Layout {
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let [lo, hi] = [
@@ -248,6 +249,21 @@ mod tests {
         );
         a.to_problem(PrecedenceMode::Strict, &PierceOptions::default())
             .unwrap();
+    }
+
+    #[test]
+    fn fifty_contours() {
+        let l = generate(&GeneratorConfig {
+            seed: 11,
+            contours: 50,
+            ..Default::default()
+        });
+        assert!(
+            (50..60).contains(&l.contour_count()),
+            "{}",
+            l.contour_count()
+        );
+        l.nesting().unwrap();
     }
 
     #[test]

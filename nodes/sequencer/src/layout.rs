@@ -180,7 +180,8 @@ pub struct Nesting {
 }
 
 impl Layout {
-    /// Parses the JSON format (module docs); `path` only names the source in errors.
+    /// Parses the JSON format (module docs; seed 003 §A1 model); `path` only names the source
+    /// in errors.
     ///
     /// # Errors
     /// [`LayoutError::Json`] with the field path, line and column.
@@ -199,7 +200,7 @@ impl Layout {
         })
     }
 
-    /// Reads a JSON layout file.
+    /// Reads a JSON layout file (seed 003 §A1 model, module docs).
     ///
     /// # Errors
     /// [`LayoutError::Io`] or [`LayoutError::Json`], naming the file.
@@ -213,12 +214,12 @@ impl Layout {
         Self::from_json_str(&text, &name)
     }
 
-    /// The layout as pretty JSON (the format in the module docs).
+    /// The layout as pretty JSON (the format in the module docs; seed 003 §A1).
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("a layout always serialises")
     }
 
-    /// Total number of contours.
+    /// Total number of contours `Σ m_i` (seed 003 §A1).
     pub fn contour_count(&self) -> usize {
         self.parts.iter().map(|p| 1 + p.holes.len()).sum()
     }
@@ -354,7 +355,7 @@ impl Layout {
         })
     }
 
-    /// Converts to a [`Problem`]: contours numbered part by part (outer contour first, then the
+    /// Converts to a [`Problem`] (seed 003 §A1, §2): contours numbered part by part (outer contour first, then the
     /// holes), precedence in `mode` (see [`precedence_from_nesting`]), pierce candidates per
     /// [`PierceOptions`] unless fixed. The precedence is checked for cycles.
     ///
@@ -409,7 +410,8 @@ impl Layout {
         })
     }
 
-    /// The contour id of part `i`'s outer contour in [`Layout::to_problem`]'s numbering.
+    /// The contour id of part `i`'s outer contour `C_i1` (seed 003 §A1) in
+    /// [`Layout::to_problem`]'s numbering; its holes follow it.
     pub fn first_contour_ids(&self) -> Vec<ContourId> {
         let mut ids = Vec::with_capacity(self.parts.len());
         let mut next = 0;

@@ -345,6 +345,55 @@ proptest! {
         }
     }
 
+    /// Random frontier walks meet the paper's rules checked from the geometry, not from the
+    /// precedence lists: in both modes no contour is cut while a contour inside it is uncut
+    /// (notes §A6); in strict mode each part is contiguous with its outer contour last, and a
+    /// part nested in a hole of part `i` is finished before any hole of `i` (seed 003 §2).
+    #[test]
+    fn random_walks_meet_the_rules(l in small_layouts(), picks in prop::collection::vec(any::<prop::sample::Index>(), 1..500)) {
+        let n = l.nesting().unwrap();
+        let first = l.first_contour_ids();
+        for mode in [PrecedenceMode::Strict, PrecedenceMode::Relaxed] {
+            let p = l.to_problem(mode, &PierceOptions::default()).unwrap();
+            let mut f = Frontier::new(&p.precedence);
+            let mut order = Vec::new();
+            while !f.is_finished() {
+                let e = f.eligible();
+                prop_assert!(!e.is_empty());
+                let c = e[picks[order.len() % picks.len()].index(e.len())];
+                f.cut(c);
+                order.push(c);
+            }
+            let mut pos = vec![0; order.len()];
+            for (k, &c) in order.iter().enumerate() {
+                pos[c] = k;
+            }
+            for (c, outer) in p.contours.iter().enumerate() {
+                for (d, inner) in p.contours.iter().enumerate() {
+                    if c != d && ring_contains(&outer.points, inner.points[0])
+                        && cell_sequencer::containment::signed_area(&inner.points).abs()
+                            < cell_sequencer::containment::signed_area(&outer.points).abs() {
+                        prop_assert!(pos[d] < pos[c], "{:?}: contour {} inside {} is cut after it", mode, d, c);
+                    }
+                }
+            }
+            if mode == PrecedenceMode::Strict {
+                for (i, part) in l.parts.iter().enumerate() {
+                    let span: Vec<usize> = (0..=part.holes.len()).map(|h| pos[first[i] + h]).collect();
+                    let (lo, hi) = (*span.iter().min().unwrap(), *span.iter().max().unwrap());
+                    prop_assert_eq!(hi - lo, part.holes.len(), "part {} is not contiguous", i);
+                    prop_assert_eq!(hi, pos[first[i]], "part {}: outer contour not last", i);
+                    if let Some((host, _)) = n.host[i] {
+                        let holes = l.parts[host].holes.len();
+                        if let Some(min_hole) = (1..=holes).map(|h| pos[first[host] + h]).min() {
+                            prop_assert!(pos[first[i]] < min_hole, "part {} nested in part {}", i, host);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// The relaxed frontier is exactly the pseudo-code's W after every cut, whichever
     /// eligible contour is picked (seed 003 §A4 GenerateW / CutAndUpdate).
     #[test]
