@@ -7,10 +7,19 @@
 //!   polylines, their candidate pierce points, the start point and the [`precedence`] rules.
 //! - [`precedence`]: which contours may be cut next (seed 003 §2, notes §A2/§A4), in strict or
 //!   relaxed mode, and the check of a whole order.
+//! - [`layout`]: the nested-layout model and its JSON format; conversion to a [`problem`] with
+//!   precedence from the containment tree and free pierce candidates (seed 003 §A1, §2).
+//! - [`containment`]: ring checks and the containment tree (seed 003 §A1 `IN` sets).
+//! - [`dxf`]: DXF input with arc flattening and chaining of loose entities (issue 7).
+//! - [`generator`]: seeded realistic nested layouts, 50–5000 contours (issue 7).
 //!
 //! Everything here is synchronous and free of ROS/DDS.
 
 #![warn(missing_docs)]
 
+pub mod containment;
+pub mod dxf;
+pub mod generator;
+pub mod layout;
 pub mod precedence;
 pub mod problem;
