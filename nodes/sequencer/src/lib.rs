@@ -8,9 +8,22 @@
 //! - [`precedence`]: which contours may be cut next (seed 003 §2, notes §A2/§A4), in strict or
 //!   relaxed mode, and the check of a whole order.
 //!
+//! - [`thermal`]: the discrete thermal raster of the sheet (seed 003 §A3) and our overheat
+//!   metric.
+//! - [`plan`] and [`cost`]: the cut plan, its metrics and the cost the improvement minimises.
+//! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
+//!   (seed 003 §A4).
+//! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//!
 //! Everything here is synchronous and free of ROS/DDS.
 
 #![warn(missing_docs)]
 
 pub mod precedence;
 pub mod problem;
+
+pub mod cost;
+pub mod improve;
+pub mod plan;
+pub mod policy;
+pub mod thermal;

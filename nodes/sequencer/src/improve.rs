@@ -1,0 +1,474 @@
+//! Improvement phase after the greedy construction (ours, beyond seed 003 §A4, which only
+//! mentions a later 2-opt; notes §A6): it never breaks precedence and never returns a plan
+//! worse than its start.
+//!
+//! 1. **Local search** on a *surrogate* cost: precedence-aware Or-opt (move a run of 1..=
+//!    `or_opt_max_len` cuts within `window` positions), 2-opt (reverse a run of up to
+//!    `window` cuts) and pierce re-selection at every position. A move is applied in place,
+//!    checked locally (predecessors inside the moved span keep their order; every group stays
+//!    contiguous) and kept only if the surrogate drops.
+//! 2. **Large-neighbourhood search** (GLNS-style remove and reinsert): remove `lns_remove`
+//!    cuts close to a random seed cut, reinsert them in their old relative order, each at the
+//!    cheapest feasible position with its cheapest pierce candidate; keep the result if the
+//!    surrogate does not rise. The best order is polished with local search once more.
+//! 3. The best surrogate plan is evaluated with the full thermal raster ([`Evaluator`]); if its
+//!    true cost is above the start's, the start is returned.
+//!
+//! **Surrogate** = idle length + corner penalties + (thermal cost on) a heat proxy: for every
+//! cut `i` and each of the `proxy_lookback` cuts `j` before it, `w_overheat_mm ·
+//! proxy_weight · (1 − g/r) / m` where `g` is the gap between the two contours' bounding boxes,
+//! `r = proxy_radius_mm` (no term when `g ≥ r`) and `m` how many cuts back `j` is. Full raster
+//! runs per move would cost a whole simulation each (measured in the bench); the proxy keeps a
+//! move's evaluation local to the moved span.
+//!
+//! Deterministic for a seed when the time budget does not bind (`time_budget_ms = 0`).
+
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::cost::Evaluator;
+use crate::plan::{Cut, CutPlan};
+use crate::problem::{distance, ContourId, Point};
+use crate::thermal::{require, ParamError};
+
+/// Knobs of the improvement phase (module docs). Defaults are ours.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImproveParams {
+    /// LNS iterations. Default 300.
+    pub max_iterations: usize,
+    /// Wall-clock budget, ms; 0 = none (then the result is deterministic). Default 0.
+    pub time_budget_ms: u64,
+    /// RNG seed. Default 0.
+    pub seed: u64,
+    /// Longest run Or-opt moves. Default 3.
+    pub or_opt_max_len: usize,
+    /// How far (positions) local moves reach. Default 25.
+    pub window: usize,
+    /// Local-search sweeps at the start and after each accepted LNS step. Default 4.
+    pub local_sweeps: usize,
+    /// Cuts removed per LNS iteration. Default 8.
+    pub lns_remove: usize,
+    /// Heat proxy radius, mm. Default 20.
+    pub proxy_radius_mm: f64,
+    /// Heat proxy look-back, cuts. Default 3.
+    pub proxy_lookback: usize,
+    /// Heat proxy weight, fraction of `w_overheat_mm`. Default 1.
+    pub proxy_weight: f64,
+}
+
+impl Default for ImproveParams {
+    fn default() -> Self {
+        ImproveParams {
+            max_iterations: 300,
+            time_budget_ms: 0,
+            seed: 0,
+            or_opt_max_len: 3,
+            window: 25,
+            local_sweeps: 4,
+            lns_remove: 8,
+            proxy_radius_mm: 20.0,
+            proxy_lookback: 3,
+            proxy_weight: 1.0,
+        }
+    }
+}
+
+impl ImproveParams {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// The first field out of range, by name.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        require(self.or_opt_max_len >= 1, "or_opt_max_len", self.or_opt_max_len, "must be ≥ 1")?;
+        require(self.window >= 1, "window", self.window, "must be ≥ 1")?;
+        require(
+            self.proxy_radius_mm.is_finite() && self.proxy_radius_mm > 0.0,
+            "proxy_radius_mm",
+            self.proxy_radius_mm,
+            "must be finite and > 0",
+        )?;
+        require(self.proxy_lookback <= 16, "proxy_lookback", self.proxy_lookback, "must be ≤ 16")?;
+        require(
+            self.proxy_weight.is_finite() && self.proxy_weight >= 0.0,
+            "proxy_weight",
+            self.proxy_weight,
+            "must be finite and ≥ 0",
+        )?;
+        Ok(())
+    }
+}
+
+/// Progress report for the action feedback (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// LNS iterations done.
+    pub iteration: usize,
+    /// Best surrogate cost so far (the true cost is only known at the end).
+    pub best_cost: f64,
+}
+
+struct Search<'e, 'p> {
+    eval: &'e Evaluator<'p>,
+    seq: Vec<Cut>,
+    pos: Vec<usize>,
+    group_of: Vec<Option<usize>>,
+    successors: Vec<Vec<ContourId>>,
+    bbox: Vec<[f64; 4]>,
+    proxy_w: f64,
+    radius: f64,
+    lookback: usize,
+}
+
+impl<'e, 'p> Search<'e, 'p> {
+    fn point(&self, i: usize) -> Point {
+        if i == usize::MAX || i >= self.seq.len() {
+            self.eval.problem.start
+        } else {
+            self.seq[i].point(self.eval.problem)
+        }
+    }
+
+    /// Heat-proxy term between contours `a` (earlier by `m` cuts) and `b`.
+    fn proxy_pair(&self, a: ContourId, b: ContourId, m: usize) -> f64 {
+        let (p, q) = (self.bbox[a], self.bbox[b]);
+        let gx = (p[0] - q[2]).max(q[0] - p[2]).max(0.0);
+        let gy = (p[1] - q[3]).max(q[1] - p[3]).max(0.0);
+        let g = gx.hypot(gy);
+        if g >= self.radius {
+            0.0
+        } else {
+            self.proxy_w * (1.0 - g / self.radius) / m as f64
+        }
+    }
+
+    /// Surrogate terms owned by position `i` (0..=n; n is the return to start): the idle
+    /// edge into it, its corner penalty and its heat-proxy look-back.
+    fn term(&self, i: usize) -> f64 {
+        let n = self.seq.len();
+        let prev = if i == 0 { usize::MAX } else { i - 1 };
+        let mut t = distance(self.point(prev), self.point(i));
+        if i < n {
+            let c = self.seq[i];
+            t += self.eval.corner_penalty(c);
+            if self.proxy_w > 0.0 {
+                for m in 1..=self.lookback.min(i) {
+                    t += self.proxy_pair(self.seq[i - m].contour, c.contour, m);
+                }
+            }
+        }
+        t
+    }
+
+    /// Sum of the terms that change when positions `lo..=hi` are permuted.
+    fn span_cost(&self, lo: usize, hi: usize) -> f64 {
+        let end = (hi + 1 + self.lookback).min(self.seq.len());
+        (lo..=end).map(|i| self.term(i)).sum()
+    }
+
+    fn total(&self) -> f64 {
+        (0..=self.seq.len()).map(|i| self.term(i)).sum()
+    }
+
+    fn reindex(&mut self, lo: usize, hi: usize) {
+        for i in lo..=hi {
+            self.pos[self.seq[i].contour] = i;
+        }
+    }
+
+    /// Local feasibility after permuting `lo..=hi` of a feasible order (module docs).
+    fn feasible_span(&self, lo: usize, hi: usize) -> bool {
+        let rules = &self.eval.problem.precedence;
+        for i in lo..=hi {
+            let c = self.seq[i].contour;
+            if rules.predecessors[c].iter().any(|&p| self.pos[p] > i) {
+                return false;
+            }
+            if let Some(g) = self.group_of[c] {
+                let members = &rules.groups[g];
+                let (mut a, mut b) = (usize::MAX, 0);
+                for &m in members {
+                    a = a.min(self.pos[m]);
+                    b = b.max(self.pos[m]);
+                }
+                if b - a + 1 != members.len() {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Applies a move on `lo..=hi`, keeps it if feasible and cheaper, else undoes it.
+    fn try_move(&mut self, lo: usize, hi: usize, apply: &dyn Fn(&mut [Cut]), undo: &dyn Fn(&mut [Cut])) -> bool {
+        let before = self.span_cost(lo, hi);
+        apply(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        if self.feasible_span(lo, hi) && self.span_cost(lo, hi) < before - 1e-9 {
+            return true;
+        }
+        undo(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        false
+    }
+
+    /// One sweep of Or-opt, 2-opt and pierce re-selection; whether anything improved.
+    fn sweep(&mut self, params: &ImproveParams) -> bool {
+        let n = self.seq.len();
+        let mut improved = false;
+        // Pierce re-selection.
+        for i in 0..n {
+            let c = self.seq[i];
+            let k = self.eval.problem.contours[c.contour].pierce_candidates.len();
+            for alt in 0..k {
+                if alt == self.seq[i].pierce {
+                    continue;
+                }
+                let keep = self.seq[i].pierce;
+                let before = self.span_cost(i, i);
+                self.seq[i].pierce = alt;
+                if self.span_cost(i, i) < before - 1e-9 {
+                    improved = true;
+                } else {
+                    self.seq[i].pierce = keep;
+                }
+            }
+        }
+        // Or-opt: move run i..i+len after position j (forward) or before j (backward).
+        for len in 1..=params.or_opt_max_len.min(n) {
+            let mut i = 0;
+            while i + len <= n {
+                for j in (i + len)..(i + len + params.window).min(n) {
+                    let (lo, hi) = (i, j);
+                    if self.try_move(lo, hi, &|s| s.rotate_left(len), &|s| s.rotate_right(len)) {
+                        improved = true;
+                        break;
+                    }
+                }
+                for j in i.saturating_sub(params.window)..i {
+                    let (lo, hi) = (j, i + len - 1);
+                    if self.try_move(lo, hi, &|s| s.rotate_right(len), &|s| s.rotate_left(len)) {
+                        improved = true;
+                        break;
+                    }
+                }
+                i += 1;
+            }
+        }
+        // 2-opt: reverse i..=j.
+        for i in 0..n {
+            for j in (i + 1)..(i + 1 + params.window).min(n) {
+                if self.try_move(i, j, &|s| s.reverse(), &|s| s.reverse()) {
+                    improved = true;
+                }
+            }
+        }
+        debug_assert_eq!(self.eval.problem.precedence.check_order(&self.order()), Ok(()));
+        improved
+    }
+
+    fn order(&self) -> Vec<ContourId> {
+        self.seq.iter().map(|c| c.contour).collect()
+    }
+
+    fn local_search(&mut self, params: &ImproveParams, deadline: &dyn Fn() -> bool) {
+        for _ in 0..params.local_sweeps {
+            if !self.sweep(params) || deadline() {
+                break;
+            }
+        }
+    }
+
+    /// One remove-and-reinsert step; `false` (and the order unchanged) if no feasible
+    /// reinsertion was found.
+    fn lns_step(&mut self, rng: &mut ChaCha8Rng, k: usize) -> bool {
+        let n = self.seq.len();
+        if n < 2 {
+            return false;
+        }
+        let problem = self.eval.problem;
+        let rules = &problem.precedence;
+        let seed_pos = rng.random_range(0..n);
+        let sp = self.point(seed_pos);
+        // The k cuts nearest the seed (ties by position: deterministic).
+        let mut by_dist: Vec<(f64, usize)> = (0..n).map(|i| (distance(sp, self.point(i)), i)).collect();
+        let k = k.min(n - 1).max(1);
+        by_dist.select_nth_unstable_by(k - 1, |a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+        let mut removed: Vec<usize> = by_dist[..k].iter().map(|&(_, i)| i).collect();
+        removed.sort_unstable();
+        let saved = self.seq.clone();
+        let out: Vec<Cut> = removed.iter().map(|&i| self.seq[i]).collect();
+        let mut is_removed = vec![false; problem.contours.len()];
+        for c in &out {
+            is_removed[c.contour] = true;
+        }
+        self.seq.retain(|c| !is_removed[c.contour]);
+        let m = self.seq.len();
+        self.reindex(0, m.saturating_sub(1));
+        for c in &out {
+            let c = c.contour;
+            // Feasible insertion indices q (insert before seq[q]).
+            let lo = rules.predecessors[c]
+                .iter()
+                .filter(|&&p| !is_removed[p])
+                .map(|&p| self.pos[p] + 1)
+                .max()
+                .unwrap_or(0);
+            let hi = self.successors[c]
+                .iter()
+                .filter(|&&s| !is_removed[s])
+                .map(|&s| self.pos[s])
+                .min()
+                .unwrap_or(self.seq.len());
+            let run = self.group_of[c].and_then(|g| {
+                let present: Vec<usize> = rules.groups[g]
+                    .iter()
+                    .filter(|&&x| x != c && !is_removed[x])
+                    .map(|&x| self.pos[x])
+                    .collect();
+                (!present.is_empty()).then(|| {
+                    (
+                        *present.iter().min().unwrap_or(&0),
+                        *present.iter().max().unwrap_or(&0) + 1,
+                    )
+                })
+            });
+            let (lo, hi) = match run {
+                Some((a, b)) => (lo.max(a), hi.min(b)),
+                None => (lo, hi),
+            };
+            let mut best: Option<(f64, usize, usize)> = None;
+            for q in lo..=hi.min(self.seq.len()) {
+                // Not strictly inside another group's run.
+                if q > 0 && q < self.seq.len() {
+                    let (a, b) = (self.group_of[self.seq[q - 1].contour], self.group_of[self.seq[q].contour]);
+                    if a.is_some() && a == b && a != self.group_of[c] {
+                        continue;
+                    }
+                }
+                let prev = if q == 0 { problem.start } else { self.point(q - 1) };
+                let next = self.point(q);
+                for (kk, &p) in problem.contours[c].pierce_candidates.iter().enumerate() {
+                    let cut = Cut { contour: c, pierce: kk };
+                    let mut d = distance(prev, p) + distance(p, next) - distance(prev, next) + self.eval.corner_penalty(cut);
+                    if self.proxy_w > 0.0 {
+                        for mm in 1..=self.lookback.min(q) {
+                            d += self.proxy_pair(self.seq[q - mm].contour, c, mm);
+                        }
+                        for mm in 1..=self.lookback.min(self.seq.len() - q) {
+                            d += self.proxy_pair(c, self.seq[q + mm - 1].contour, mm);
+                        }
+                    }
+                    if best.is_none_or(|b| d < b.0) {
+                        best = Some((d, q, kk));
+                    }
+                }
+            }
+            let Some((_, q, kk)) = best else {
+                self.seq = saved;
+                let n = self.seq.len();
+                self.reindex(0, n - 1);
+                return false;
+            };
+            self.seq.insert(q, Cut { contour: c, pierce: kk });
+            is_removed[c] = false;
+            let len = self.seq.len();
+            self.reindex(q, len - 1);
+        }
+        if rules.check_order(&self.order()).is_err() {
+            self.seq = saved;
+            let n = self.seq.len();
+            self.reindex(0, n - 1);
+            return false;
+        }
+        true
+    }
+}
+
+/// Improves `start` (module docs), calling `feedback` after every LNS iteration.
+///
+/// # Errors
+/// An invalid [`ImproveParams`] field.
+pub fn improve(
+    eval: &Evaluator,
+    start: &CutPlan,
+    params: &ImproveParams,
+    mut feedback: impl FnMut(Progress),
+) -> Result<CutPlan, ParamError> {
+    params.validate()?;
+    let problem = eval.problem;
+    let n = problem.contours.len();
+    if start.cuts.len() < 2 || problem.precedence.check_order(&start.order()).is_err() {
+        return Ok(start.clone());
+    }
+    let t0 = Instant::now();
+    let budget = params.time_budget_ms;
+    let deadline = || budget > 0 && t0.elapsed().as_millis() as u64 >= budget;
+    let mut successors = vec![Vec::new(); n];
+    for (c, preds) in problem.precedence.predecessors.iter().enumerate() {
+        for &p in preds {
+            successors[p].push(c);
+        }
+    }
+    let bbox = problem
+        .contours
+        .iter()
+        .map(|c| {
+            c.points.iter().fold([f64::MAX, f64::MAX, f64::MIN, f64::MIN], |b, p| {
+                [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+            })
+        })
+        .collect();
+    let mut s = Search {
+        eval,
+        seq: start.cuts.clone(),
+        pos: vec![0; n],
+        group_of: problem.precedence.group_of(),
+        successors,
+        bbox,
+        proxy_w: if eval.cost_params().thermal {
+            eval.cost_params().w_overheat_mm * params.proxy_weight
+        } else {
+            0.0
+        },
+        radius: params.proxy_radius_mm,
+        lookback: params.proxy_lookback,
+    };
+    s.reindex(0, n - 1);
+    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    s.local_search(params, &deadline);
+    let mut cur = s.total();
+    let mut best = (cur, s.seq.clone());
+    for iteration in 0..params.max_iterations {
+        if deadline() {
+            break;
+        }
+        let saved = s.seq.clone();
+        if s.lns_step(&mut rng, params.lns_remove) {
+            let cost = s.total();
+            if cost <= cur + 1e-9 {
+                cur = cost;
+                if cost < best.0 - 1e-9 {
+                    best = (cost, s.seq.clone());
+                }
+            } else {
+                s.seq = saved;
+                s.reindex(0, n - 1);
+            }
+        }
+        feedback(Progress {
+            iteration: iteration + 1,
+            best_cost: best.0,
+        });
+    }
+    // Polish the best order.
+    s.seq = best.1;
+    s.reindex(0, n - 1);
+    s.local_search(params, &deadline);
+    debug_assert_eq!(problem.precedence.check_order(&s.order()), Ok(()));
+    let plan = eval.evaluate(&s.seq);
+    Ok(if plan.cost <= start.cost { plan } else { start.clone() })
+}

@@ -1,0 +1,156 @@
+//! The paper's greedy construction with its four `SelectContour` policies (seed 003 §A4; notes
+//! §A4 for the scoring, which the paper does not give).
+//!
+//! The loop is the paper's `Main`: while the frontier `W` is not empty, pick a contour and a
+//! pierce candidate, cut it (heating the live raster), update `W`. With several pierce
+//! candidates each policy also picks the pierce point, which makes the problem a generalised
+//! TSP. Every score adds the candidate's corner penalty ([`crate::cost`]) to the idle
+//! distance `d`.
+//!
+//! A candidate's *heat* is read on the live raster before it is cut: the hottest
+//! neighbourhood ([`ThermalSim::hot_near_c`]) over its pierce point and up to 8 vertices spread
+//! evenly over the contour.
+//!
+//! - [`Policy::Nearest`]: "shortest path", minimum `d`.
+//! - [`Policy::MinOverheat`]: "minimisation of overheating": fewest sample points at or above
+//!   `t_max`, then the coolest (heat in 25 °C bins), then minimum `d`.
+//! - [`Policy::Random`]: "random transitions", uniform over `W` and the candidates, seeded.
+//! - [`Policy::PathOverheat`]: the authors' method, "minimisation of the path and overheating
+//!   considering real-time temperature": candidates whose heat is at or above `t_max − delta`
+//!   are rejected; the nearest of the rest wins. If every candidate is rejected, the score is
+//!   `d + hot_penalty_mm · (heat − (t_max − delta)) / max(delta, 1 °C)` (penalised, not
+//!   rejected, so the loop always progresses).
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::cost::Evaluator;
+use crate::plan::{Cut, CutPlan};
+use crate::precedence::{Frontier, Violation};
+use crate::problem::{distance, Point};
+use crate::thermal::ThermalSim;
+
+/// A `SelectContour` variant (seed 003 §A4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Policy {
+    /// Nearest pierce point ("shortest path").
+    Nearest,
+    /// Minimum overheating.
+    MinOverheat,
+    /// Random transitions (seeded).
+    Random,
+    /// Path plus overheating with the live temperature (the authors' method).
+    PathOverheat,
+}
+
+impl Policy {
+    /// All four, in the paper's order.
+    pub const ALL: [Policy; 4] = [Policy::Nearest, Policy::MinOverheat, Policy::Random, Policy::PathOverheat];
+
+    /// Whether the policy reads the live raster.
+    pub fn is_thermal(self) -> bool {
+        matches!(self, Policy::MinOverheat | Policy::PathOverheat)
+    }
+}
+
+/// Sample points per contour for the heat reading (module docs).
+fn samples(eval: &Evaluator) -> Vec<Vec<Point>> {
+    eval.problem
+        .contours
+        .iter()
+        .map(|c| {
+            let n = c.points.len();
+            let k = n.min(8);
+            (0..k).map(|i| c.points[i * n / k.max(1)]).collect()
+        })
+        .collect()
+}
+
+/// Builds a plan with `policy` (seed 003 §A4 `Main`), then evaluates it with `eval`.
+///
+/// # Errors
+/// [`Violation::Cycle`] if the rules leave contours that can never be cut.
+pub fn construct(eval: &Evaluator, policy: Policy, seed: u64) -> Result<CutPlan, Violation> {
+    let problem = eval.problem;
+    let rules = &problem.precedence;
+    let mut frontier = Frontier::new(rules);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut sim: Option<ThermalSim> = policy.is_thermal().then(|| eval.sim());
+    let samples = if policy.is_thermal() { samples(eval) } else { Vec::new() };
+    let t_max = eval.thermal_params().t_max_c;
+    let limit = t_max - eval.thermal_params().delta_c;
+    let mut at = problem.start;
+    let mut cuts = Vec::with_capacity(problem.contours.len());
+    loop {
+        let w = frontier.eligible();
+        if w.is_empty() {
+            break;
+        }
+        let pick = match policy {
+            Policy::Random => {
+                let contour = w[rng.random_range(0..w.len())];
+                let k = problem.contours[contour].pierce_candidates.len();
+                Cut {
+                    contour,
+                    pierce: rng.random_range(0..k),
+                }
+            }
+            _ => {
+                let mut best: Option<((f64, f64, f64), Cut)> = None;
+                for &contour in &w {
+                    // Contour heat (vertex samples) is shared by its candidates.
+                    let (body_hot, body_heat) = match &sim {
+                        Some(s) => samples[contour].iter().fold((0usize, f32::MIN), |(n, m), &p| {
+                            let h = s.hot_near_c(p);
+                            (n + usize::from(h >= t_max), m.max(h))
+                        }),
+                        None => (0, f32::MIN),
+                    };
+                    for (k, &p) in problem.contours[contour].pierce_candidates.iter().enumerate() {
+                        let cut = Cut { contour, pierce: k };
+                        let d = distance(at, p) + eval.corner_penalty(cut);
+                        let key = match (&sim, policy) {
+                            (Some(s), Policy::MinOverheat) => {
+                                let h = s.hot_near_c(p);
+                                let hot = body_hot + usize::from(h >= t_max);
+                                let heat = h.max(body_heat);
+                                (hot as f64, (heat / 25.0).floor() as f64, d)
+                            }
+                            (Some(s), Policy::PathOverheat) => {
+                                let heat = s.hot_near_c(p).max(body_heat);
+                                if heat < limit {
+                                    (0.0, d, 0.0)
+                                } else {
+                                    let over = f64::from(heat - limit) / f64::from(eval.thermal_params().delta_c.max(1.0));
+                                    (1.0, d + eval.cost_params().hot_penalty_mm * over, 0.0)
+                                }
+                            }
+                            _ => (d, 0.0, 0.0),
+                        };
+                        if best.as_ref().is_none_or(|(b, _)| key < *b) {
+                            best = Some((key, cut));
+                        }
+                    }
+                }
+                best.map(|(_, c)| c).unwrap_or(Cut {
+                    contour: w[0],
+                    pierce: 0,
+                })
+            }
+        };
+        frontier.cut(pick.contour);
+        let p = pick.point(problem);
+        if let Some(s) = sim.as_mut() {
+            s.cut_contour(&problem.contours[pick.contour], p);
+        }
+        at = p;
+        cuts.push(pick);
+    }
+    if !frontier.is_finished() {
+        let stuck = (0..rules.len()).filter(|&c| !frontier.is_cut(c)).collect();
+        return Err(Violation::Cycle(stuck));
+    }
+    Ok(eval.evaluate(&cuts))
+}
