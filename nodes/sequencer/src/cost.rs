@@ -53,16 +53,36 @@ impl CostParams {
     /// The first field out of range, by name.
     pub fn validate(&self) -> Result<(), ParamError> {
         let nonneg = |v: f64| v.is_finite() && v >= 0.0;
-        require(nonneg(self.w_overheat_mm), "w_overheat_mm", self.w_overheat_mm, "must be finite and ≥ 0")?;
-        require(nonneg(self.corner_radius_mm), "corner_radius_mm", self.corner_radius_mm, "must be finite and ≥ 0")?;
+        require(
+            nonneg(self.w_overheat_mm),
+            "w_overheat_mm",
+            self.w_overheat_mm,
+            "must be finite and ≥ 0",
+        )?;
+        require(
+            nonneg(self.corner_radius_mm),
+            "corner_radius_mm",
+            self.corner_radius_mm,
+            "must be finite and ≥ 0",
+        )?;
         require(
             nonneg(self.corner_angle_deg) && self.corner_angle_deg <= 180.0,
             "corner_angle_deg",
             self.corner_angle_deg,
             "must lie in [0, 180]",
         )?;
-        require(nonneg(self.corner_penalty_mm), "corner_penalty_mm", self.corner_penalty_mm, "must be finite and ≥ 0")?;
-        require(nonneg(self.hot_penalty_mm), "hot_penalty_mm", self.hot_penalty_mm, "must be finite and ≥ 0")?;
+        require(
+            nonneg(self.corner_penalty_mm),
+            "corner_penalty_mm",
+            self.corner_penalty_mm,
+            "must be finite and ≥ 0",
+        )?;
+        require(
+            nonneg(self.hot_penalty_mm),
+            "hot_penalty_mm",
+            self.hot_penalty_mm,
+            "must be finite and ≥ 0",
+        )?;
         Ok(())
     }
 }
@@ -105,7 +125,11 @@ impl<'p> Evaluator<'p> {
     ///
     /// # Errors
     /// [`EvalError`] naming the bad field or contour.
-    pub fn new(problem: &'p Problem, thermal: ThermalParams, cost: CostParams) -> Result<Self, EvalError> {
+    pub fn new(
+        problem: &'p Problem,
+        thermal: ThermalParams,
+        cost: CostParams,
+    ) -> Result<Self, EvalError> {
         thermal.validate()?;
         cost.validate()?;
         if problem.precedence.len() != problem.contours.len() {
@@ -114,7 +138,11 @@ impl<'p> Evaluator<'p> {
                 contours: problem.contours.len(),
             });
         }
-        if let Some(c) = problem.contours.iter().position(|c| c.pierce_candidates.is_empty()) {
+        if let Some(c) = problem
+            .contours
+            .iter()
+            .position(|c| c.pierce_candidates.is_empty())
+        {
             return Err(EvalError::NoPierce(c));
         }
         // Validate the sheet once.
@@ -127,7 +155,11 @@ impl<'p> Evaluator<'p> {
                 let n = c.points.len();
                 let corners: Vec<_> = (0..n)
                     .filter(|&i| {
-                        let (a, b, d) = (c.points[(i + n - 1) % n], c.points[i], c.points[(i + 1) % n]);
+                        let (a, b, d) = (
+                            c.points[(i + n - 1) % n],
+                            c.points[i],
+                            c.points[(i + 1) % n],
+                        );
                         let u = [a[0] - b[0], a[1] - b[1]];
                         let v = [d[0] - b[0], d[1] - b[1]];
                         let (lu, lv) = (u[0].hypot(u[1]), v[0].hypot(v[1]));
@@ -142,7 +174,10 @@ impl<'p> Evaluator<'p> {
                 c.pierce_candidates
                     .iter()
                     .map(|&p| {
-                        if corners.iter().any(|&q| distance(p, q) <= cost.corner_radius_mm) {
+                        if corners
+                            .iter()
+                            .any(|&q| distance(p, q) <= cost.corner_radius_mm)
+                        {
                             cost.corner_penalty_mm
                         } else {
                             0.0

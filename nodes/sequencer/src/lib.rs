@@ -14,6 +14,7 @@
 //! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
 //!   (seed 003 §A4).
 //! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//! - [`fixtures`]: hand-built grid instances for tests and the bench.
 //!
 //! Everything here is synchronous and free of ROS/DDS.
 
@@ -27,3 +28,5 @@ pub mod improve;
 pub mod plan;
 pub mod policy;
 pub mod thermal;
+
+pub mod fixtures;

@@ -39,6 +39,31 @@ use crate::problem::{distance, Contour, Point};
 /// Side of the square update tiles, cells.
 const TILE: usize = 16;
 
+/// Tile edge flags: heat on the left/right/bottom/top border of a tile, or anywhere.
+const LEFT: u8 = 1;
+const RIGHT: u8 = 2;
+const BOTTOM: u8 = 4;
+const TOP: u8 = 8;
+const ANY: u8 = 16;
+
+/// Edge flags of cell `(x, y)` in a tile `tw × th`.
+fn edge_bits(x: usize, y: usize, tw: usize, th: usize) -> u8 {
+    let mut e = ANY;
+    if x == 0 {
+        e |= LEFT;
+    }
+    if x + 1 == tw {
+        e |= RIGHT;
+    }
+    if y == 0 {
+        e |= BOTTOM;
+    }
+    if y + 1 == th {
+        e |= TOP;
+    }
+    e
+}
+
 /// All constants of the thermal raster (seed 003 §A3). The paper gives no numbers (notes
 /// §A0); the defaults are **ours**, for plasma cutting of ~6 mm mild steel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,8 +85,9 @@ pub struct ThermalParams {
     /// Conductivity to and from kerf ("air") cells per step, `0 ≤ k_air ≤ k_conductivity`.
     /// Default 0.01.
     pub k_air: f32,
-    /// `K_loss` retention per step (1 = no loss), `0 < k ≤ 1`. Default 0.97 (with the default
-    /// 0.1 s step: heat halves in about 2.3 s).
+    /// `K_loss` retention per step (1 = no loss), `0 < k ≤ 1`. Default 0.995 (with the
+    /// default 0.1 s step: heat halves in about 14 s, convection and radiation from a 6 mm
+    /// plate).
     pub k_loss: f32,
     /// Cutting feed, mm/s. Default 40 (2.4 m/min).
     pub cut_speed_mm_s: f64,
@@ -73,7 +99,7 @@ pub struct ThermalParams {
     pub overheat_radius_cells: usize,
     /// Length of the cut segments counted by the overheat metric, mm. Default 20.
     pub segment_mm: f64,
-    /// Excess below which a cell is rounded to ambient, °C. Default 0.5.
+    /// Excess below which a cell is rounded to ambient, °C. Default 1.
     pub epsilon_c: f32,
 }
 
@@ -87,13 +113,13 @@ impl Default for ThermalParams {
             delta_c: 100.0,
             k_conductivity: 0.1,
             k_air: 0.01,
-            k_loss: 0.97,
+            k_loss: 0.995,
             cut_speed_mm_s: 40.0,
             rapid_speed_mm_s: 250.0,
             pierce_dwell_s: 0.5,
             overheat_radius_cells: 1,
             segment_mm: 20.0,
-            epsilon_c: 0.5,
+            epsilon_c: 1.0,
         }
     }
 }
@@ -138,8 +164,18 @@ impl ThermalParams {
     /// The first field out of range, by name.
     pub fn validate(&self) -> Result<(), ParamError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        require(pos(self.cell_mm), "cell_mm", self.cell_mm, "must be finite and > 0")?;
-        require(self.ambient_c.is_finite(), "ambient_c", self.ambient_c, "must be finite")?;
+        require(
+            pos(self.cell_mm),
+            "cell_mm",
+            self.cell_mm,
+            "must be finite and > 0",
+        )?;
+        require(
+            self.ambient_c.is_finite(),
+            "ambient_c",
+            self.ambient_c,
+            "must be finite",
+        )?;
         require(
             self.t_melt_c.is_finite() && self.t_melt_c > self.ambient_c,
             "t_melt_c",
@@ -147,7 +183,9 @@ impl ThermalParams {
             "must be finite and above ambient_c",
         )?;
         require(
-            self.t_max_c.is_finite() && self.t_max_c > self.ambient_c && self.t_max_c <= self.t_melt_c,
+            self.t_max_c.is_finite()
+                && self.t_max_c > self.ambient_c
+                && self.t_max_c <= self.t_melt_c,
             "t_max_c",
             self.t_max_c,
             "must lie in (ambient_c, t_melt_c]",
@@ -200,7 +238,12 @@ impl ThermalParams {
             self.overheat_radius_cells,
             "must be ≤ 16",
         )?;
-        require(pos(self.segment_mm), "segment_mm", self.segment_mm, "must be finite and > 0")?;
+        require(
+            pos(self.segment_mm),
+            "segment_mm",
+            self.segment_mm,
+            "must be finite and > 0",
+        )?;
         require(
             self.epsilon_c.is_finite() && self.epsilon_c >= 0.0,
             "epsilon_c",
@@ -234,6 +277,9 @@ pub struct Frame<'a> {
     /// Row-major (`y * width + x`, y up from the sheet origin) excess over ambient, °C.
     pub excess_c: &'a [f32],
 }
+
+/// A callback receiving raster frames (seed 003 §A3 snapshots for the `HeatMap` stream).
+pub type FrameObserver<'a> = &'a mut dyn FnMut(&Frame);
 
 /// What cutting one contour did (seed 003 §A3, our overheat metric).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -277,6 +323,10 @@ pub struct ThermalSim<'a> {
     tiles_x: usize,
     tiles_y: usize,
     active: Vec<bool>,
+    /// Edge flags per tile (heat on a border: its neighbour must be updated too).
+    edges: Vec<u8>,
+    /// Cells that need the mixed-conductivity update: sheet border and next to kerf.
+    slow: Vec<bool>,
     active_list: Vec<usize>,
     stamp: Vec<u64>,
     update_list: Vec<usize>,
@@ -286,7 +336,7 @@ pub struct ThermalSim<'a> {
     tool: Point,
     overheats: usize,
     per_cut: Vec<CutThermal>,
-    observer: Option<(u64, &'a mut dyn FnMut(&Frame))>,
+    observer: Option<(u64, FrameObserver<'a>)>,
 }
 
 impl<'a> ThermalSim<'a> {
@@ -326,6 +376,13 @@ impl<'a> ThermalSim<'a> {
             tiles_x,
             tiles_y,
             active: vec![false; tiles_x * tiles_y],
+            edges: vec![0; tiles_x * tiles_y],
+            slow: (0..n)
+                .map(|i| {
+                    let (x, y) = (i % width, i / width);
+                    x == 0 || y == 0 || x + 1 == width || y + 1 == height
+                })
+                .collect(),
             active_list: Vec::new(),
             stamp: vec![0; tiles_x * tiles_y],
             update_list: Vec::new(),
@@ -341,7 +398,7 @@ impl<'a> ThermalSim<'a> {
 
     /// Calls `observer` with a [`Frame`] every `every` spread steps (`every ≥ 1`; 0 is
     /// treated as 1).
-    pub fn with_frames(mut self, every: u64, observer: &'a mut dyn FnMut(&Frame)) -> Self {
+    pub fn with_frames(mut self, every: u64, observer: FrameObserver<'a>) -> Self {
         self.observer = Some((every.max(1), observer));
         self
     }
@@ -417,10 +474,23 @@ impl<'a> ThermalSim<'a> {
     }
 
     fn melt(&mut self, x: usize, y: usize) {
-        let i = y * self.width + x;
+        let (w, h) = (self.width, self.height);
+        let i = y * w + x;
         self.t[i] = self.melt_excess;
         self.fresh.push(i);
+        // Cells next to kerf take the slow (mixed-conductivity) path from now on.
+        for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+            for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                self.slow[yy * w + xx] = true;
+            }
+        }
         let tile = (y / TILE) * self.tiles_x + x / TILE;
+        self.edges[tile] |= edge_bits(
+            x % TILE,
+            y % TILE,
+            TILE.min(w - x / TILE * TILE),
+            TILE.min(h - y / TILE * TILE),
+        );
         if !self.active[tile] {
             self.active[tile] = true;
             self.active_list.push(tile);
@@ -438,13 +508,28 @@ impl<'a> ThermalSim<'a> {
     fn spread(&mut self) {
         self.step += 1;
         self.time_s = self.step as f64 * self.params.dt_s();
-        // The tiles to update: the active ones and their neighbours.
+        // The tiles to update: the active ones, and their neighbours across an edge that
+        // holds heat (heat moves one cell per step).
         self.update_list.clear();
         let stamp = self.step;
         for &tile in &self.active_list {
             let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
+            let e = self.edges[tile];
             for ny in ty.saturating_sub(1)..=(ty + 1).min(self.tiles_y - 1) {
                 for nx in tx.saturating_sub(1)..=(tx + 1).min(self.tiles_x - 1) {
+                    let need_x = match nx.cmp(&tx) {
+                        std::cmp::Ordering::Less => e & LEFT != 0,
+                        std::cmp::Ordering::Greater => e & RIGHT != 0,
+                        std::cmp::Ordering::Equal => true,
+                    };
+                    let need_y = match ny.cmp(&ty) {
+                        std::cmp::Ordering::Less => e & BOTTOM != 0,
+                        std::cmp::Ordering::Greater => e & TOP != 0,
+                        std::cmp::Ordering::Equal => true,
+                    };
+                    if !(need_x && need_y) {
+                        continue;
+                    }
                     let n = ny * self.tiles_x + nx;
                     if self.stamp[n] != stamp {
                         self.stamp[n] = stamp;
@@ -453,23 +538,37 @@ impl<'a> ThermalSim<'a> {
                 }
             }
         }
-        // Deterministic order regardless of how tiles were activated.
+        // Deterministic order regardless of how tiles were activated (the update itself is
+        // double-buffered, so order only matters for the active list).
         self.update_list.sort_unstable();
         let (w, h) = (self.width, self.height);
         let k_loss = self.params.k_loss;
+        let k_metal = self.params.k_conductivity;
         for &tile in &self.update_list {
             let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
             for y in y0..y1 {
-                let ylo = y.saturating_sub(1);
-                let yhi = (y + 1).min(h - 1);
                 for x in x0..x1 {
                     let i = y * w + x;
                     let ti = self.t[i];
+                    if !self.slow[i] {
+                        // Interior metal cell among metal: k(Σ neighbours − 8·T).
+                        let t = &self.t;
+                        let s = t[i - w - 1]
+                            + t[i - w]
+                            + t[i - w + 1]
+                            + t[i - 1]
+                            + t[i + 1]
+                            + t[i + w - 1]
+                            + t[i + w]
+                            + t[i + w + 1];
+                        self.next[i] = (ti + k_metal * (s - 8.0 * ti)) * k_loss;
+                        continue;
+                    }
                     let ki = self.kc[i];
-                    let xlo = x.saturating_sub(1);
-                    let xhi = (x + 1).min(w - 1);
+                    let (ylo, yhi) = (y.saturating_sub(1), (y + 1).min(h - 1));
+                    let (xlo, xhi) = (x.saturating_sub(1), (x + 1).min(w - 1));
                     let mut acc = 0.0f32;
                     for yy in ylo..=yhi {
                         let row = yy * w;
@@ -489,17 +588,16 @@ impl<'a> ThermalSim<'a> {
             self.kc[i] = self.params.k_air;
         }
         self.fresh.clear();
-        // Copy back, round to ambient, track activity and the metal maximum.
+        // Copy back, round to ambient, track activity, hot edges and the metal maximum.
         let eps = self.params.epsilon_c;
         let k_air = self.params.k_air;
-        let k_metal = self.params.k_conductivity;
         let mut max_metal = self.max_metal_excess;
         self.active_list.clear();
         for &tile in &self.update_list {
             let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
             let (x0, y0) = (tx * TILE, ty * TILE);
             let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let mut any = false;
+            let mut edges = 0u8;
             for y in y0..y1 {
                 for x in x0..x1 {
                     let i = y * w + x;
@@ -507,7 +605,7 @@ impl<'a> ThermalSim<'a> {
                     if v < eps {
                         v = 0.0;
                     } else {
-                        any = true;
+                        edges |= edge_bits(x - x0, y - y0, x1 - x0, y1 - y0) | ANY;
                         // Metal cells (air cells hold kerf heat); equal k means no air.
                         if self.kc[i] != k_air || k_air == k_metal {
                             max_metal = max_metal.max(v);
@@ -516,14 +614,15 @@ impl<'a> ThermalSim<'a> {
                     self.t[i] = v;
                 }
             }
-            self.active[tile] = any;
-            if any {
+            self.edges[tile] = edges;
+            self.active[tile] = edges != 0;
+            if edges != 0 {
                 self.active_list.push(tile);
             }
         }
         self.max_metal_excess = max_metal;
         if let Some((every, observer)) = self.observer.as_mut() {
-            if self.step % *every == 0 {
+            if self.step.is_multiple_of(*every) {
                 let frame = Frame {
                     step: self.step,
                     time_s: self.time_s,
@@ -585,7 +684,10 @@ impl<'a> ThermalSim<'a> {
             let n = (len / step_mm).ceil() as usize;
             for k in 1..=n {
                 let f = k as f64 / n as f64;
-                let p = [w[0][0] + f * (w[1][0] - w[0][0]), w[0][1] + f * (w[1][1] - w[0][1])];
+                let p = [
+                    w[0][0] + f * (w[1][0] - w[0][0]),
+                    w[0][1] + f * (w[1][1] - w[0][1]),
+                ];
                 let (x, y) = self.cell(p);
                 self.melt(x, y);
                 self.spread();
@@ -655,12 +757,15 @@ fn project(a: Point, b: Point, p: Point) -> Point {
 }
 
 /// The point at arc length `s` along a polyline (its end if `s` is past it).
-fn point_along(path: &[Point], mut s: f64) -> Point {
+pub(crate) fn point_along(path: &[Point], mut s: f64) -> Point {
     for w in path.windows(2) {
         let len = distance(w[0], w[1]);
         if s <= len && len > 0.0 {
             let f = s / len;
-            return [w[0][0] + f * (w[1][0] - w[0][0]), w[0][1] + f * (w[1][1] - w[0][1])];
+            return [
+                w[0][0] + f * (w[1][0] - w[0][0]),
+                w[0][1] + f * (w[1][1] - w[0][1]),
+            ];
         }
         s -= len;
     }
@@ -693,7 +798,11 @@ mod tests {
             cut_speed_mm_s: 0.0,
             ..Default::default()
         };
-        assert!(p.validate().unwrap_err().to_string().contains("cut_speed_mm_s"));
+        assert!(p
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("cut_speed_mm_s"));
         assert!(ThermalSim::new([0.0, 1.0], [0.0, 0.0], &ThermalParams::default()).is_err());
     }
 
@@ -708,6 +817,7 @@ mod tests {
         let mut sim = ThermalSim::new([40.0, 40.0], [0.0, 0.0], &p).unwrap();
         sim.t[5 * 10 + 5] = 1000.0;
         sim.active[0] = true;
+        sim.edges[0] = ANY;
         sim.active_list.push(0);
         sim.spread();
         let dt = 1000.0 * p.k_conductivity;
@@ -723,18 +833,21 @@ mod tests {
         let run = || {
             let mut sim =
                 ThermalSim::new([200.0, 200.0], [0.0, 0.0], &ThermalParams::default()).unwrap();
-            let a = square(20.0, 20.0, 50.0);
-            let b = square(75.0, 20.0, 50.0);
-            sim.cut_contour(&a, [20.0, 20.0]);
-            let hot = sim.cut_contour(&b, [75.0, 20.0]);
+            let a = square(20.0, 75.0, 50.0);
+            let b = square(20.0, 20.0, 50.0);
+            sim.cut_contour(&a, [20.0, 75.0]);
+            let hot = sim.cut_contour(&b, [20.0, 70.0]);
             (sim.frame().excess_c.to_vec(), hot, sim.finish([0.0, 0.0]))
         };
         let (t1, hot, o1) = run();
         let (t2, _, o2) = run();
-        assert_eq!(t1.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), t2.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+        assert_eq!(
+            t1.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            t2.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
         assert_eq!(o1, o2);
         assert!(o1.max_temp_c > 300.0, "{}", o1.max_temp_c);
-        // The second square is pierced 5 mm from the fresh kerf of the first.
+        // The second square is pierced 5 mm from where the first one ended.
         assert!(hot.pierce_overheats + hot.segment_overheats > 0, "{hot:?}");
     }
 
