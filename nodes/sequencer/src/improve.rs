@@ -16,8 +16,10 @@
 //!
 //! **Surrogate** = idle length + corner penalties + (thermal cost on) a heat proxy: for every
 //! cut `i` and each of the `proxy_lookback` cuts `j` before it, `w_overheat_mm ·
-//! proxy_weight · (1 − g/r) / m` where `g` is the gap between the two contours' bounding boxes,
-//! `r = proxy_radius_mm` (no term when `g ≥ r`) and `m` how many cuts back `j` is. Full raster
+//! proxy_weight · (1 − g/r) · k_loss^(s / cell_mm)` where `g` is the gap between the two
+//! contours' bounding boxes, `r = proxy_radius_mm` (no term when `g ≥ r`) and `s` the cutting
+//! (plus pierce dwell at cut speed) between the middle of `j`'s cut and the start of `i`'s,
+//! mm: the raster's retention over the steps in between. Full raster
 //! runs per move would cost a whole simulation each (measured in the bench); the proxy keeps a
 //! move's evaluation local to the moved span.
 //!
@@ -31,7 +33,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::cost::Evaluator;
 use crate::plan::{Cut, CutPlan};
-use crate::problem::{distance, ContourId, Point};
+use crate::problem::{ContourId, Point};
+
+/// Euclidean distance without `hypot`'s overflow care (coordinates are mm on a sheet).
+fn dist(a: Point, b: Point) -> f64 {
+    let (dx, dy) = (a[0] - b[0], a[1] - b[1]);
+    (dx * dx + dy * dy).sqrt()
+}
 use crate::thermal::{require, ParamError};
 
 /// Knobs of the improvement phase (module docs). Defaults are ours.
@@ -52,9 +60,9 @@ pub struct ImproveParams {
     pub local_sweeps: usize,
     /// Cuts removed per LNS iteration. Default 8.
     pub lns_remove: usize,
-    /// Heat proxy radius, mm. Default 20.
+    /// Heat proxy radius, mm. Default 30 (about how far heat spreads in 100 steps).
     pub proxy_radius_mm: f64,
-    /// Heat proxy look-back, cuts. Default 3.
+    /// Heat proxy look-back, cuts. Default 8.
     pub proxy_lookback: usize,
     /// Heat proxy weight, fraction of `w_overheat_mm`. Default 1.
     pub proxy_weight: f64,
@@ -70,8 +78,8 @@ impl Default for ImproveParams {
             window: 25,
             local_sweeps: 4,
             lns_remove: 8,
-            proxy_radius_mm: 20.0,
-            proxy_lookback: 3,
+            proxy_radius_mm: 30.0,
+            proxy_lookback: 8,
             proxy_weight: 1.0,
         }
     }
@@ -128,6 +136,10 @@ struct Search<'e, 'p> {
     group_of: Vec<Option<usize>>,
     successors: Vec<Vec<ContourId>>,
     bbox: Vec<[f64; 4]>,
+    /// Cut length plus the dwell's equivalent, per contour, mm.
+    cut_len: Vec<f64>,
+    /// Heat retention per mm of cutting: `-ln(k_loss) / cell_mm`.
+    decay_per_mm: f64,
     proxy_w: f64,
     radius: f64,
     lookback: usize,
@@ -142,17 +154,23 @@ impl<'e, 'p> Search<'e, 'p> {
         }
     }
 
-    /// Heat-proxy term between contours `a` (earlier by `m` cuts) and `b`.
-    fn proxy_pair(&self, a: ContourId, b: ContourId, m: usize) -> f64 {
+    /// Heat-proxy term between contour `a`, cut `gap_mm` of cutting before `b` starts, and
+    /// `b` (module docs).
+    fn proxy_pair(&self, a: ContourId, b: ContourId, gap_mm: f64) -> f64 {
         let (p, q) = (self.bbox[a], self.bbox[b]);
         let gx = (p[0] - q[2]).max(q[0] - p[2]).max(0.0);
         let gy = (p[1] - q[3]).max(q[1] - p[3]).max(0.0);
-        let g = gx.hypot(gy);
-        if g >= self.radius {
+        let g2 = gx * gx + gy * gy;
+        if g2 >= self.radius * self.radius {
             0.0
         } else {
-            self.proxy_w * (1.0 - g / self.radius) / m as f64
+            self.proxy_w * (1.0 - g2.sqrt() / self.radius) * (-gap_mm * self.decay_per_mm).exp()
         }
+    }
+
+    /// Cutting (plus dwell) between the middle of contour `c`'s cut and its end, mm.
+    fn half(&self, c: ContourId) -> f64 {
+        0.5 * self.cut_len[c]
     }
 
     /// Surrogate terms owned by position `i` (0..=n; n is the return to start): the idle
@@ -160,13 +178,16 @@ impl<'e, 'p> Search<'e, 'p> {
     fn term(&self, i: usize) -> f64 {
         let n = self.seq.len();
         let prev = if i == 0 { usize::MAX } else { i - 1 };
-        let mut t = distance(self.point(prev), self.point(i));
+        let mut t = dist(self.point(prev), self.point(i));
         if i < n {
             let c = self.seq[i];
             t += self.eval.corner_penalty(c);
             if self.proxy_w > 0.0 {
+                let mut gap = 0.0;
                 for m in 1..=self.lookback.min(i) {
-                    t += self.proxy_pair(self.seq[i - m].contour, c.contour, m);
+                    let j = self.seq[i - m].contour;
+                    t += self.proxy_pair(j, c.contour, gap + self.half(j));
+                    gap += self.cut_len[j];
                 }
             }
         }
@@ -315,8 +336,7 @@ impl<'e, 'p> Search<'e, 'p> {
         let seed_pos = rng.random_range(0..n);
         let sp = self.point(seed_pos);
         // The k cuts nearest the seed (ties by position: deterministic).
-        let mut by_dist: Vec<(f64, usize)> =
-            (0..n).map(|i| (distance(sp, self.point(i)), i)).collect();
+        let mut by_dist: Vec<(f64, usize)> = (0..n).map(|i| (dist(sp, self.point(i)), i)).collect();
         let k = k.min(n - 1).max(1);
         by_dist.select_nth_unstable_by(k - 1, |a, b| {
             a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
@@ -387,14 +407,20 @@ impl<'e, 'p> Search<'e, 'p> {
                         contour: c,
                         pierce: kk,
                     };
-                    let mut d = distance(prev, p) + distance(p, next) - distance(prev, next)
+                    let mut d = dist(prev, p) + dist(p, next) - dist(prev, next)
                         + self.eval.corner_penalty(cut);
                     if self.proxy_w > 0.0 {
+                        let mut gap = 0.0;
                         for mm in 1..=self.lookback.min(q) {
-                            d += self.proxy_pair(self.seq[q - mm].contour, c, mm);
+                            let j = self.seq[q - mm].contour;
+                            d += self.proxy_pair(j, c, gap + self.half(j));
+                            gap += self.cut_len[j];
                         }
+                        let mut gap = self.half(c);
                         for mm in 1..=self.lookback.min(self.seq.len() - q) {
-                            d += self.proxy_pair(c, self.seq[q + mm - 1].contour, mm);
+                            let j = self.seq[q + mm - 1].contour;
+                            d += self.proxy_pair(c, j, gap);
+                            gap += self.cut_len[j];
                         }
                     }
                     if best.is_none_or(|b| d < b.0) {
@@ -482,6 +508,15 @@ pub fn improve(
         } else {
             0.0
         },
+        cut_len: problem
+            .contours
+            .iter()
+            .map(|c| {
+                c.perimeter()
+                    + eval.thermal_params().pierce_dwell_s * eval.thermal_params().cut_speed_mm_s
+            })
+            .collect(),
+        decay_per_mm: -f64::from(eval.thermal_params().k_loss).ln() / eval.thermal_params().cell_mm,
         radius: params.proxy_radius_mm,
         lookback: params.proxy_lookback,
     };
