@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::plan::{idle_length, Cut, CutPlan};
 use crate::problem::{distance, Problem};
-use crate::thermal::{require, ParamError, ThermalParams, ThermalSim};
+use crate::thermal::{require, ParamError, ThermalOutcome, ThermalParams, ThermalSim};
 
 /// Weights of the cost (module docs). Defaults are ours.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -241,30 +241,44 @@ impl<'p> Evaluator<'p> {
 
     /// As [`Evaluator::evaluate`], driving a given raster (e.g. one with a frame observer).
     pub fn evaluate_with(&self, cuts: &[Cut], mut sim: ThermalSim<'_>) -> CutPlan {
+        if !self.cost.thermal {
+            return self.assemble(cuts, None);
+        }
+        for c in cuts {
+            sim.cut_contour(&self.problem.contours[c.contour], c.point(self.problem));
+        }
+        let out = sim.finish(self.problem.start);
+        self.assemble(cuts, Some(&out))
+    }
+
+    /// The plan of `cuts` whose raster run gave `thermal` (`None`: thermal cost off, or not
+    /// simulated). Used when a policy already drove the raster through the same cuts.
+    pub fn assemble(&self, cuts: &[Cut], thermal: Option<&ThermalOutcome>) -> CutPlan {
         let idle_mm = idle_length(self.problem, cuts);
         let cut_mm = cuts.iter().map(|c| self.cut_len[c.contour][c.pierce]).sum();
         let corner: f64 = cuts.iter().map(|&c| self.corner_penalty(c)).sum();
-        if !self.cost.thermal {
-            return CutPlan {
-                cuts: cuts.to_vec(),
-                idle_mm,
-                cut_mm,
-                overheats: 0,
-                max_temp_c: self.thermal.ambient_c,
-                lead_in_penalty: corner,
-                time_s: 0.0,
-                cost: idle_mm + corner,
-            };
-        }
-        let hot_limit = self.thermal.t_max_c - self.thermal.delta_c;
-        let mut hot = 0.0;
-        for c in cuts {
-            let r = sim.cut_contour(&self.problem.contours[c.contour], c.point(self.problem));
-            if r.pierce_temp_c >= hot_limit {
-                hot += self.cost.hot_penalty_mm;
+        let out = match thermal {
+            Some(out) if self.cost.thermal => out,
+            _ => {
+                return CutPlan {
+                    cuts: cuts.to_vec(),
+                    idle_mm,
+                    cut_mm,
+                    overheats: 0,
+                    max_temp_c: self.thermal.ambient_c,
+                    lead_in_penalty: corner,
+                    time_s: 0.0,
+                    cost: idle_mm + corner,
+                }
             }
-        }
-        let out = sim.finish(self.problem.start);
+        };
+        let hot_limit = self.thermal.t_max_c - self.thermal.delta_c;
+        let hot = out
+            .per_cut
+            .iter()
+            .filter(|r| r.pierce_temp_c >= hot_limit)
+            .count() as f64
+            * self.cost.hot_penalty_mm;
         let lead_in_penalty = corner + hot;
         CutPlan {
             cuts: cuts.to_vec(),

@@ -675,6 +675,8 @@ mod tests {
             let eval = Evaluator::new(&problem, ThermalParams::default(), cost).unwrap();
             let start = construct(&eval, Policy::ALL[policy], seed).unwrap();
             prop_assert_eq!(problem.precedence.check_order(&start.order()), Ok(()));
+            // A thermal policy's own raster run is the evaluator's.
+            prop_assert_eq!(&eval.evaluate(&start.cuts), &start);
             let params = ImproveParams { seed, ..quick() };
             let better = improve(&eval, &start, &params, |_| {}).unwrap();
             prop_assert_eq!(better.cuts.len(), problem.contours.len());

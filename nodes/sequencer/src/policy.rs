@@ -187,7 +187,14 @@ pub fn construct(eval: &Evaluator, policy: Policy, seed: u64) -> Result<CutPlan,
         let stuck = (0..rules.len()).filter(|&c| !frontier.is_cut(c)).collect();
         return Err(Violation::Cycle(stuck));
     }
-    Ok(eval.evaluate(&cuts))
+    // The thermal policies drove the raster through exactly these cuts: reuse the run.
+    Ok(match sim {
+        Some(s) if eval.cost_params().thermal => {
+            let out = s.finish(problem.start);
+            eval.assemble(&cuts, Some(&out))
+        }
+        _ => eval.evaluate(&cuts),
+    })
 }
 
 #[cfg(test)]

@@ -303,6 +303,8 @@ pub struct ThermalOutcome {
     pub time_s: f64,
     /// Spread steps.
     pub steps: u64,
+    /// Cell updates (the simulation's work; tiles updated × tile area).
+    pub cells_updated: u64,
     /// Per contour, in cutting order.
     pub per_cut: Vec<CutThermal>,
 }
@@ -725,6 +727,7 @@ impl<'a> ThermalSim<'a> {
             max_temp_c: self.max_temp_c(),
             time_s: self.time_s,
             steps: self.step,
+            cells_updated: self.cells_updated,
             per_cut: std::mem::take(&mut self.per_cut),
         }
     }
@@ -832,14 +835,15 @@ impl Grid<'_> {
             &kc[i - 1..i + 2],
             &kc[i + w - 1..i + w + 2],
         );
-        ti + ki.min(ku[0]) * (u[0] - ti)
+        let acc = ki.min(ku[0]) * (u[0] - ti)
             + ki.min(ku[1]) * (u[1] - ti)
             + ki.min(ku[2]) * (u[2] - ti)
             + ki.min(km[0]) * (m[0] - ti)
             + ki.min(km[2]) * (m[2] - ti)
             + ki.min(kd[0]) * (d[0] - ti)
             + ki.min(kd[1]) * (d[1] - ti)
-            + ki.min(kd[2]) * (d[2] - ti)
+            + ki.min(kd[2]) * (d[2] - ti);
+        ti + acc
     }
 }
 
@@ -981,6 +985,47 @@ mod tests {
         assert!(o1.max_temp_c > 300.0, "{}", o1.max_temp_c);
         // The second square is pierced 5 mm from where the first one ended.
         assert!(hot.pierce_overheats + hot.segment_overheats > 0, "{hot:?}");
+    }
+
+    /// The tiled, fast-path update agrees with a plain full-grid reference of the rule
+    /// (seed 003 §A3, module docs) after kerf cuts and many steps.
+    #[test]
+    fn tiled_update_matches_the_reference() {
+        let p = ThermalParams::default();
+        let mut sim = ThermalSim::new([150.0, 120.0], [0.0, 0.0], &p).unwrap();
+        sim.cut_contour(&square(2.0, 2.0, 60.0), [2.0, 2.0]);
+        sim.cut_contour(&square(70.0, 30.0, 40.0), [70.0, 30.0]);
+        let (w, h) = sim.size();
+        let mut t = sim.t.clone();
+        let kc = sim.kc.clone();
+        for _ in 0..40 {
+            let mut next = vec![0.0f32; w * h];
+            for y in 0..h {
+                for x in 0..w {
+                    let i = y * w + x;
+                    let mut acc = 0.0f32;
+                    for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+                        for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                            let j = yy * w + xx;
+                            if j != i {
+                                acc += kc[i].min(kc[j]) * (t[j] - t[i]);
+                            }
+                        }
+                    }
+                    let v = (t[i] + acc) * p.k_loss;
+                    next[i] = if v < p.epsilon_c { 0.0 } else { v };
+                }
+            }
+            t = next;
+            sim.spread();
+        }
+        let worst = t
+            .iter()
+            .zip(&sim.t)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 0.01, "tiled vs reference differ by {worst} °C");
+        assert!(t.iter().any(|&v| v > 100.0));
     }
 
     #[test]
