@@ -566,9 +566,13 @@ impl<'a> ThermalSim<'a> {
             for y in y0..y1 {
                 let border_row = y == 0 || y + 1 == h;
                 let row = y * w;
-                if !border_row && interior_cols && !grid.slow[row + x0..row + x1].iter().any(|&b| b)
-                {
-                    grid.metal_run(row + x0, row + x1, &mut next[row + x0..row + x1], k_loss);
+                if !border_row && interior_cols {
+                    let out = &mut next[row + x0..row + x1];
+                    if grid.slow[row + x0..row + x1].iter().any(|&b| b) {
+                        grid.mixed_run(row + x0, row + x1, out, k_loss);
+                    } else {
+                        grid.metal_run(row + x0, row + x1, out, k_loss);
+                    }
                     continue;
                 }
                 for x in x0..x1 {
