@@ -141,3 +141,32 @@ pub fn grid(
         },
     }
 }
+
+/// `n` small round contours (8-gons of radius 5 mm) at seeded random places on a 1 m sheet,
+/// one pierce point each and no precedence: a plain TSP for comparing idle length with a TSP
+/// solver (issue 7's LKH-3 target).
+pub fn scattered(n: usize, seed: u64) -> Problem {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let contours = (0..n)
+        .map(|i| {
+            let c = [rng.random_range(20.0..980.0), rng.random_range(20.0..980.0)];
+            let points = (0..8)
+                .map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / 8.0;
+                    [c[0] + 5.0 * a.cos(), c[1] + 5.0 * a.sin()]
+                })
+                .collect();
+            contour(i, ContourRole::Outer, points, vec![[c[0] + 5.0, c[1]]])
+        })
+        .collect();
+    Problem {
+        sheet: [1000.0, 1000.0],
+        start: [0.0, 0.0],
+        contours,
+        precedence: Precedence {
+            predecessors: vec![vec![]; n],
+            groups: vec![],
+        },
+    }
+}

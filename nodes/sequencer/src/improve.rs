@@ -2,7 +2,10 @@
 //! mentions a later 2-opt; notes §A6): it never breaks precedence and never returns a plan
 //! worse than its start.
 //!
-//! 1. **Local search** on a *surrogate* cost: precedence-aware Or-opt (move a run of 1..=
+//! 1. **Local search** on a *surrogate* cost. Without the heat proxy (thermal cost off): 2-opt
+//!    and Or-opt (runs of 1..=3, either way round) between each contour and its 10 nearest
+//!    contours, at any distance along the sequence, with O(1) idle deltas. Then, and always
+//!    with the proxy: precedence-aware Or-opt (move a run of 1..=
 //!    `or_opt_max_len` cuts within `window` positions), 2-opt (reverse a run of up to
 //!    `window` cuts) and pierce re-selection at every position. A move is applied in place,
 //!    checked locally (predecessors inside the moved span keep their order; every group stays
@@ -10,7 +13,9 @@
 //! 2. **Large-neighbourhood search** (GLNS-style remove and reinsert): remove `lns_remove`
 //!    cuts close to a random seed cut, reinsert them in their old relative order, each at the
 //!    cheapest feasible position with its cheapest pierce candidate; keep the result if the
-//!    surrogate does not rise. The best order is polished with local search once more.
+//!    surrogate does not rise. Without the heat proxy every reinsertion is first polished
+//!    with the neighbour-list moves (iterated local search). The best order is polished with
+//!    local search once more.
 //! 3. The best surrogate plan is evaluated with the full thermal raster ([`Evaluator`]); if its
 //!    true cost is above the start's, the start is returned.
 //!
@@ -46,7 +51,7 @@ use crate::thermal::{require, ParamError};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ImproveParams {
-    /// LNS iterations. Default 300.
+    /// LNS iterations. Default 1000.
     pub max_iterations: usize,
     /// Wall-clock budget, ms; 0 = none (then the result is deterministic). Default 0.
     pub time_budget_ms: u64,
@@ -71,7 +76,7 @@ pub struct ImproveParams {
 impl Default for ImproveParams {
     fn default() -> Self {
         ImproveParams {
-            max_iterations: 300,
+            max_iterations: 1000,
             time_budget_ms: 0,
             seed: 0,
             or_opt_max_len: 3,
@@ -120,6 +125,9 @@ impl ImproveParams {
     }
 }
 
+/// Neighbour-list length of the idle-only moves.
+const NEAR: usize = 10;
+
 /// Progress report for the action feedback (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
@@ -136,6 +144,9 @@ struct Search<'e, 'p> {
     group_of: Vec<Option<usize>>,
     successors: Vec<Vec<ContourId>>,
     bbox: Vec<[f64; 4]>,
+    /// The `NEAR` contours nearest each contour (bounding-box centres), and the start.
+    near: Vec<Vec<ContourId>>,
+    near_start: Vec<ContourId>,
     /// Cut length plus the dwell's equivalent, per contour, mm.
     cut_len: Vec<f64>,
     /// Heat retention per mm of cutting: `-ln(k_loss) / cell_mm`.
@@ -317,11 +328,170 @@ impl<'e, 'p> Search<'e, 'p> {
     }
 
     fn local_search(&mut self, params: &ImproveParams, deadline: &dyn Fn() -> bool) {
+        if self.proxy_w == 0.0 {
+            // Idle cost only: neighbour-list moves with O(1) deltas, to a local optimum.
+            for _ in 0..params.local_sweeps * 8 {
+                if !self.neighbour_sweep() || deadline() {
+                    break;
+                }
+            }
+        }
         for _ in 0..params.local_sweeps {
             if !self.sweep(params) || deadline() {
                 break;
             }
         }
+    }
+
+    /// Point at position `i`, with −1 and `n` the start point.
+    fn pt(&self, i: isize) -> Point {
+        if i < 0 {
+            self.eval.problem.start
+        } else {
+            self.point(i as usize)
+        }
+    }
+
+    /// Applies `apply` to `lo..=hi` if it is feasible (else undoes it with `undo`).
+    fn commit_if_feasible(
+        &mut self,
+        lo: usize,
+        hi: usize,
+        apply: &dyn Fn(&mut [Cut]),
+        undo: &dyn Fn(&mut [Cut]),
+    ) -> bool {
+        apply(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        if self.feasible_span(lo, hi) {
+            return true;
+        }
+        undo(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        false
+    }
+
+    /// One sweep of 2-opt and Or-opt over spatial neighbour lists (any sequence distance),
+    /// idle-length deltas in O(1); only valid without the heat proxy. Whether it improved.
+    fn neighbour_sweep(&mut self) -> bool {
+        let n = self.seq.len() as isize;
+        let mut improved = false;
+        let eps = 1e-9;
+        // 2-opt: new edges P(a)–P(b) and P(a+1)–P(b+1), reversing a+1..=b.
+        for a in -1..n - 1 {
+            let ca = if a < 0 {
+                None
+            } else {
+                Some(self.seq[a as usize].contour)
+            };
+            let near = match ca {
+                Some(c) => self.near[c].clone(),
+                None => self.near_start.clone(),
+            };
+            for &v in near.iter() {
+                let b = self.pos[v] as isize;
+                let (e1, e2) = if b > a { (a, b) } else { (b, a) };
+                if e2 - e1 < 2 {
+                    continue;
+                }
+                let delta = dist(self.pt(e1), self.pt(e2)) + dist(self.pt(e1 + 1), self.pt(e2 + 1))
+                    - dist(self.pt(e1), self.pt(e1 + 1))
+                    - dist(self.pt(e2), self.pt(e2 + 1));
+                if delta < -eps
+                    && self.commit_if_feasible(
+                        (e1 + 1) as usize,
+                        e2 as usize,
+                        &|s| s.reverse(),
+                        &|s| s.reverse(),
+                    )
+                {
+                    improved = true;
+                    break;
+                }
+            }
+        }
+        // Or-opt: move seq[i..i+len] between q and q+1, either way round.
+        for len in 1..=3isize {
+            let mut i = 0isize;
+            while i + len <= n {
+                let first = self.seq[i as usize].contour;
+                let (pf, pl) = (self.pt(i), self.pt(i + len - 1));
+                let (pp, pn) = (
+                    self.pt(i - 1),
+                    self.pt(if i + len == n { -1 } else { i + len }),
+                );
+                let gain = dist(pp, pf) + dist(pl, pn) - dist(pp, pn);
+                let mut done = false;
+                for &v in self.near[first].clone().iter() {
+                    let b = self.pos[v] as isize;
+                    for q in [b, b - 1] {
+                        if q >= i - 1 && q < i + len {
+                            continue;
+                        }
+                        let (qa, qb) = (self.pt(q), self.pt(if q + 1 == n { -1 } else { q + 1 }));
+                        let fwd = dist(qa, pf) + dist(pl, qb) - dist(qa, qb);
+                        let rev = dist(qa, pl) + dist(pf, qb) - dist(qa, qb);
+                        let (add, reversed) = if rev < fwd { (rev, true) } else { (fwd, false) };
+                        if add - gain >= -eps {
+                            continue;
+                        }
+                        let l = len as usize;
+                        let ok = if q > i {
+                            let (lo, hi) = (i as usize, q as usize);
+                            self.commit_if_feasible(
+                                lo,
+                                hi,
+                                &|s: &mut [Cut]| {
+                                    s.rotate_left(l);
+                                    if reversed {
+                                        let m = s.len();
+                                        s[m - l..].reverse();
+                                    }
+                                },
+                                &|s: &mut [Cut]| {
+                                    if reversed {
+                                        let m = s.len();
+                                        s[m - l..].reverse();
+                                    }
+                                    s.rotate_right(l);
+                                },
+                            )
+                        } else {
+                            let (lo, hi) = ((q + 1) as usize, (i + len - 1) as usize);
+                            self.commit_if_feasible(
+                                lo,
+                                hi,
+                                &|s: &mut [Cut]| {
+                                    s.rotate_right(l);
+                                    if reversed {
+                                        s[..l].reverse();
+                                    }
+                                },
+                                &|s: &mut [Cut]| {
+                                    if reversed {
+                                        s[..l].reverse();
+                                    }
+                                    s.rotate_left(l);
+                                },
+                            )
+                        };
+                        if ok {
+                            improved = true;
+                            done = true;
+                            break;
+                        }
+                    }
+                    if done {
+                        break;
+                    }
+                }
+                i += 1;
+            }
+        }
+        debug_assert_eq!(
+            self.eval.problem.precedence.check_order(&self.order()),
+            Ok(())
+        );
+        improved
     }
 
     /// One remove-and-reinsert step; `false` (and the order unchanged) if no feasible
@@ -480,7 +650,7 @@ pub fn improve(
             successors[p].push(c);
         }
     }
-    let bbox = problem
+    let bbox: Vec<[f64; 4]> = problem
         .contours
         .iter()
         .map(|c| {
@@ -496,7 +666,31 @@ pub fn improve(
                 })
         })
         .collect();
+    let centre = |b: &[f64; 4]| [(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0];
+    let nearest_to = |p: Point, skip: Option<usize>| {
+        let mut d: Vec<(f64, usize)> = bbox
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| Some(j) != skip)
+            .map(|(j, b)| (dist(p, centre(b)), j))
+            .collect();
+        let k = NEAR.min(d.len());
+        if k > 0 && k < d.len() {
+            d.select_nth_unstable_by(k - 1, |a, b| {
+                a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
+            });
+        }
+        d.truncate(k);
+        d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+        d.into_iter().map(|(_, j)| j).collect::<Vec<_>>()
+    };
+    let near = (0..n)
+        .map(|c| nearest_to(centre(&bbox[c]), Some(c)))
+        .collect();
+    let near_start = nearest_to(problem.start, None);
     let mut s = Search {
+        near,
+        near_start,
         eval,
         seq: start.cuts.clone(),
         pos: vec![0; n],
@@ -531,6 +725,14 @@ pub fn improve(
         }
         let saved = s.seq.clone();
         if s.lns_step(&mut rng, params.lns_remove) {
+            if s.proxy_w == 0.0 {
+                // Cheap O(1)-delta moves: polish every perturbation (iterated local search).
+                for _ in 0..20 {
+                    if !s.neighbour_sweep() {
+                        break;
+                    }
+                }
+            }
             let cost = s.total();
             if cost <= cur + 1e-9 {
                 cur = cost;
@@ -564,50 +766,17 @@ pub fn improve(
 mod tests {
     use super::*;
     use crate::cost::CostParams;
-    use crate::fixtures::grid;
+    use crate::fixtures::{grid, scattered};
     use crate::policy::{construct, Policy};
-    use crate::precedence::{Precedence, PrecedenceMode};
-    use crate::problem::{Contour, ContourRole, Problem};
+    use crate::precedence::PrecedenceMode;
     use crate::thermal::ThermalParams;
     use proptest::prelude::*;
-    use rand::Rng;
 
     fn quick() -> ImproveParams {
         ImproveParams {
             max_iterations: 30,
             local_sweeps: 2,
             ..Default::default()
-        }
-    }
-
-    /// `n` small round contours at seeded random places, no precedence.
-    fn scattered(n: usize, seed: u64) -> Problem {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let contours = (0..n)
-            .map(|i| {
-                let c = [rng.random_range(20.0..980.0), rng.random_range(20.0..980.0)];
-                let points = (0..8)
-                    .map(|k| {
-                        let a = k as f64 * std::f64::consts::TAU / 8.0;
-                        [c[0] + 5.0 * a.cos(), c[1] + 5.0 * a.sin()]
-                    })
-                    .collect();
-                Contour {
-                    part: i,
-                    role: ContourRole::Outer,
-                    points,
-                    pierce_candidates: vec![[c[0] + 5.0, c[1]]],
-                }
-            })
-            .collect();
-        Problem {
-            sheet: [1000.0, 1000.0],
-            start: [0.0, 0.0],
-            contours,
-            precedence: Precedence {
-                predecessors: vec![vec![]; n],
-                groups: vec![],
-            },
         }
     }
 

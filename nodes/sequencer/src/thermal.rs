@@ -37,7 +37,7 @@ use serde::{Deserialize, Serialize};
 use crate::problem::{distance, Contour, Point};
 
 /// Side of the square update tiles, cells.
-const TILE: usize = 8;
+const TILE: usize = 16;
 
 /// Tile edge flags: heat on the left/right/bottom/top border of a tile, or anywhere.
 const LEFT: u8 = 1;
@@ -778,7 +778,8 @@ impl Grid<'_> {
             &t[a + w - 1..b + w + 1],
         );
         let k = self.k_metal;
-        for (x, o) in out.iter_mut().enumerate().take(n) {
+        let (u, m, d) = (&u[..n + 2], &m[..n + 2], &d[..n + 2]);
+        for (x, o) in out[..n].iter_mut().enumerate() {
             let ti = m[x + 1];
             let s = u[x] + u[x + 1] + u[x + 2] + m[x] + m[x + 2] + d[x] + d[x + 1] + d[x + 2];
             *o = (ti + k * (s - 8.0 * ti)) * k_loss;
@@ -801,7 +802,16 @@ impl Grid<'_> {
             &kc[a - 1..b + 1],
             &kc[a + w - 1..b + w + 1],
         );
-        for (x, o) in out.iter_mut().enumerate().take(n) {
+        // Known lengths let the compiler drop the bounds checks and vectorise.
+        let (u, m, d, ku, km, kd) = (
+            &u[..n + 2],
+            &m[..n + 2],
+            &d[..n + 2],
+            &ku[..n + 2],
+            &km[..n + 2],
+            &kd[..n + 2],
+        );
+        for (x, o) in out[..n].iter_mut().enumerate() {
             let (ti, ki) = (m[x + 1], km[x + 1]);
             let f = |tj: f32, kj: f32| ki.min(kj) * (tj - ti);
             let acc = f(u[x], ku[x])
