@@ -5,7 +5,8 @@
 //! LKH-3's (PyPI `elkai` via `benches/lkh_peer.py`, when installed).
 //!
 //! `cargo bench -p cell_sequencer --bench sequencing [-- SIZES...]` (sizes in contours, default
-//! 50 500 1000). `K_LOSS`, `T_MAX_C`, `CELL_MM` and `K_C` override the thermal defaults.
+//! 50 500 1000). `K_LOSS`, `T_MAX_C`, `CELL_MM` and `K_C` override the thermal defaults,
+//! `PROXY_WEIGHT` and `PROXY_RADIUS` the improvement's heat proxy.
 
 use std::time::Instant;
 
@@ -55,11 +56,17 @@ fn main() {
                 if policy == Policy::Nearest {
                     nearest = Some(plan.clone());
                 }
-                if policy == Policy::PathOverheat || (!thermal && policy == Policy::Nearest) {
+                if matches!(policy, Policy::PathOverheat | Policy::CostGreedy)
+                    || (!thermal && policy == Policy::Nearest)
+                {
                     let t0 = Instant::now();
+                    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
+                    let d = ImproveParams::default();
                     let params = ImproveParams {
                         time_budget_ms: 1500,
-                        ..Default::default()
+                        proxy_weight: env("PROXY_WEIGHT").unwrap_or(d.proxy_weight),
+                        proxy_radius_mm: env("PROXY_RADIUS").unwrap_or(d.proxy_radius_mm),
+                        ..d
                     };
                     let better = improve(&eval, &plan, &params, |_| {}).unwrap();
                     let ms2 = ms + t0.elapsed().as_secs_f64() * 1e3;

@@ -835,7 +835,7 @@ mod tests {
         #[test]
         fn improvement_keeps_the_rules_and_never_worsens(
             nx in 1usize..4, ny in 1usize..4, nest: bool, free: bool, strict: bool,
-            thermal: bool, policy in 0usize..4, seed in 0u64..1000,
+            thermal: bool, policy in 0usize..5, seed in 0u64..1000,
         ) {
             let mode = if strict { PrecedenceMode::Strict } else { PrecedenceMode::Relaxed };
             let problem = grid(nx, ny, 57.0, nest, free, mode);

@@ -1,4 +1,4 @@
-//! The paper's greedy construction with its four `SelectContour` policies (seed 003 §A4; notes
+//! The paper's greedy construction with its four `SelectContour` policies (and one of ours) (seed 003 §A4; notes
 //! §A4 for the scoring, which the paper does not give).
 //!
 //! The loop is the paper's `Main`: while the frontier `W` is not empty, pick a contour and a
@@ -21,6 +21,9 @@
 //!   `d + w_overheat_mm · hot + hot_penalty_mm · (heat − (t_max − delta)) / max(delta, 1 °C)`
 //!   with `hot` the sample points at or above `t_max` (penalised, not rejected, so the loop
 //!   always progresses).
+//! - [`Policy::CostGreedy`] (ours, beyond the paper): the step of the plan cost itself,
+//!   `d + w_overheat_mm · hot + hot_penalty_mm · [pierce heat ≥ t_max − delta]`, with `hot` as
+//!   above: the overheats the metric would count if the contour were cut now.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -44,11 +47,22 @@ pub enum Policy {
     Random,
     /// Path plus overheating with the live temperature (the authors' method).
     PathOverheat,
+    /// Ours, beyond the paper: greedy on the plan cost itself (module docs).
+    CostGreedy,
 }
 
 impl Policy {
-    /// All four, in the paper's order.
-    pub const ALL: [Policy; 4] = [
+    /// All five: the paper's four in its order, then ours.
+    pub const ALL: [Policy; 5] = [
+        Policy::Nearest,
+        Policy::MinOverheat,
+        Policy::Random,
+        Policy::PathOverheat,
+        Policy::CostGreedy,
+    ];
+
+    /// The paper's four, in its order.
+    pub const PAPER: [Policy; 4] = [
         Policy::Nearest,
         Policy::MinOverheat,
         Policy::Random,
@@ -57,7 +71,10 @@ impl Policy {
 
     /// Whether the policy reads the live raster.
     pub fn is_thermal(self) -> bool {
-        matches!(self, Policy::MinOverheat | Policy::PathOverheat)
+        matches!(
+            self,
+            Policy::MinOverheat | Policy::PathOverheat | Policy::CostGreedy
+        )
     }
 }
 
@@ -161,6 +178,13 @@ pub fn construct(eval: &Evaluator, policy: Policy, seed: u64) -> Result<CutPlan,
                                         0.0,
                                     )
                                 }
+                            }
+                            (Some(s), Policy::CostGreedy) => {
+                                let h = s.hot_near_c(p);
+                                let hot = body_hot + usize::from(h >= t_max);
+                                let cost = eval.cost_params();
+                                let lead = if h >= limit { cost.hot_penalty_mm } else { 0.0 };
+                                (d + cost.w_overheat_mm * hot as f64 + lead, 0.0, 0.0)
                             }
                             _ => (d, 0.0, 0.0),
                         };
