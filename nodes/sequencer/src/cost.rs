@@ -235,6 +235,10 @@ impl<'p> Evaluator<'p> {
     }
 
     /// Evaluates a full cut sequence (module docs): runs the raster unless thermal cost is off.
+    ///
+    /// # Panics
+    /// If a cut names a contour or pierce candidate the problem does not have (plans from
+    /// [`crate::policy`] and [`crate::improve`] never do).
     pub fn evaluate(&self, cuts: &[Cut]) -> CutPlan {
         self.evaluate_with(cuts, self.sim())
     }

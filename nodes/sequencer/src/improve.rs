@@ -683,7 +683,8 @@ impl<'e, 'p> Search<'e, 'p> {
 /// Improves `start` (module docs), calling `feedback` after every LNS iteration.
 ///
 /// # Errors
-/// An invalid [`ImproveParams`] field.
+/// An invalid [`ImproveParams`] field, or a start plan naming a contour or pierce candidate
+/// the problem does not have (field `start.cuts`).
 pub fn improve(
     eval: &Evaluator,
     start: &CutPlan,
@@ -693,6 +694,18 @@ pub fn improve(
     params.validate()?;
     let problem = eval.problem;
     let n = problem.contours.len();
+    if let Some(c) = start.cuts.iter().find(|c| {
+        problem
+            .contours
+            .get(c.contour)
+            .is_none_or(|k| c.pierce >= k.pierce_candidates.len())
+    }) {
+        return Err(ParamError::Invalid {
+            field: "start.cuts",
+            value: format!("{c:?}"),
+            reason: "names a contour or pierce candidate the problem does not have",
+        });
+    }
     if start.cuts.len() < 2 || problem.precedence.check_order(&start.order()).is_err() {
         return Ok(start.clone());
     }
