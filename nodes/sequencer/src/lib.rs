@@ -7,7 +7,6 @@
 //!   polylines, their candidate pierce points, the start point and the [`precedence`] rules.
 //! - [`precedence`]: which contours may be cut next (seed 003 §2, notes §A2/§A4), in strict or
 //!   relaxed mode, and the check of a whole order.
-//!
 //! - [`thermal`]: the discrete thermal raster of the sheet (seed 003 §A3) and our overheat
 //!   metric.
 //! - [`plan`] and [`cost`]: the cut plan, its metrics and the cost the improvement minimises.
