@@ -12,6 +12,13 @@
 //! - [`containment`]: ring checks and the containment tree (seed 003 §A1 `IN` sets).
 //! - [`dxf`]: DXF input with arc flattening and chaining of loose entities (issue 7).
 //! - [`generator`]: seeded realistic nested layouts, 50–5000 contours (issue 7).
+//! - [`thermal`]: the discrete thermal raster of the sheet (seed 003 §A3) and our overheat
+//!   metric.
+//! - [`plan`] and [`cost`]: the cut plan, its metrics and the cost the improvement minimises.
+//! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
+//!   (seed 003 §A4).
+//! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//! - [`fixtures`]: hand-built grid instances for tests and the bench.
 //!
 //! Everything here is synchronous and free of ROS/DDS.
 
@@ -23,3 +30,11 @@ pub mod generator;
 pub mod layout;
 pub mod precedence;
 pub mod problem;
+
+pub mod cost;
+pub mod improve;
+pub mod plan;
+pub mod policy;
+pub mod thermal;
+
+pub mod fixtures;

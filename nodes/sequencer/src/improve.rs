@@ -1,0 +1,934 @@
+//! Improvement phase after the greedy construction (ours, beyond seed 003 §A4, which only
+//! mentions a later 2-opt; notes §A6): it never breaks precedence and never returns a plan
+//! worse than its start.
+//!
+//! 1. **Local search** on a *surrogate* cost. Without the heat proxy (thermal cost off): 2-opt
+//!    and Or-opt (runs of 1..=3, either way round) between each contour and its 10 nearest
+//!    contours, at any distance along the sequence, with O(1) idle deltas. Then, and always
+//!    with the proxy: precedence-aware Or-opt (move a run of 1..=
+//!    `or_opt_max_len` cuts within `window` positions), 2-opt (reverse a run of up to
+//!    `window` cuts) and pierce re-selection at every position. A move is applied in place,
+//!    checked locally (predecessors inside the moved span keep their order; every group stays
+//!    contiguous) and kept only if the surrogate drops.
+//! 2. **Large-neighbourhood search** (GLNS-style remove and reinsert): remove `lns_remove`
+//!    cuts close to a random seed cut, reinsert them in their old relative order, each at the
+//!    cheapest feasible position with its cheapest pierce candidate; keep the result if the
+//!    surrogate does not rise. Without the heat proxy every reinsertion is first polished
+//!    with the neighbour-list moves (iterated local search). The best order is polished with
+//!    local search once more.
+//! 3. The best surrogate plan is evaluated with the full thermal raster ([`Evaluator`]); if its
+//!    true cost is above the start's, the start is returned.
+//!
+//! **Surrogate** = idle length + corner penalties + (thermal cost on) a heat proxy: for every
+//! cut `b` and each of the `proxy_lookback` cuts `a` before it, `w_overheat_mm ·
+//! proxy_weight · e(a, b) · ½^(s / proxy_half_life_mm)`, where the *exposure* `e(a, b)` counts
+//! the places of `b` the overheat metric checks (points every `segment_mm` along it) that lie
+//! within `proxy_radius_mm` of `a`'s polyline, and `s` is the cutting (plus pierce dwell at
+//! cut speed) between the middle of `a`'s cut and the start of `b`'s, mm. A full raster run
+//! per move would cost a whole simulation each (measured in the bench); the proxy keeps a
+//! move's evaluation local to the moved span.
+//!
+//! Deterministic for a seed when the time budget does not bind (`time_budget_ms = 0`).
+
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::cost::Evaluator;
+use crate::plan::{Cut, CutPlan};
+use crate::problem::{ContourId, Point};
+
+/// Euclidean distance without `hypot`'s overflow care (coordinates are mm on a sheet).
+fn dist(a: Point, b: Point) -> f64 {
+    let (dx, dy) = (a[0] - b[0], a[1] - b[1]);
+    (dx * dx + dy * dy).sqrt()
+}
+use crate::thermal::{require, ParamError};
+
+/// Knobs of the improvement phase (module docs). Defaults are ours.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImproveParams {
+    /// LNS iterations. Default 1000.
+    pub max_iterations: usize,
+    /// Wall-clock budget, ms; 0 = none (then the result is deterministic). Default 0.
+    pub time_budget_ms: u64,
+    /// RNG seed. Default 0.
+    pub seed: u64,
+    /// Longest run Or-opt moves. Default 3.
+    pub or_opt_max_len: usize,
+    /// How far (positions) local moves reach. Default 25.
+    pub window: usize,
+    /// Local-search sweeps at the start and after each accepted LNS step. Default 4.
+    pub local_sweeps: usize,
+    /// Cuts removed per LNS iteration. Default 8.
+    pub lns_remove: usize,
+    /// Heat proxy radius: check points of a contour this close to an earlier contour's
+    /// polyline are exposed to its heat, mm. Default 30 (best of 10/20/30/45 on the bench).
+    pub proxy_radius_mm: f64,
+    /// Heat proxy half-life, mm of cutting in between. Default 150.
+    pub proxy_half_life_mm: f64,
+    /// Heat proxy look-back, cuts. Default 8.
+    pub proxy_lookback: usize,
+    /// Heat proxy weight, fraction of `w_overheat_mm`. Default 1.
+    pub proxy_weight: f64,
+}
+
+impl Default for ImproveParams {
+    fn default() -> Self {
+        ImproveParams {
+            max_iterations: 1000,
+            time_budget_ms: 0,
+            seed: 0,
+            or_opt_max_len: 3,
+            window: 25,
+            local_sweeps: 4,
+            lns_remove: 8,
+            proxy_radius_mm: 30.0,
+            proxy_half_life_mm: 150.0,
+            proxy_lookback: 8,
+            proxy_weight: 1.0,
+        }
+    }
+}
+
+impl ImproveParams {
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// The first field out of range, by name.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        require(
+            self.or_opt_max_len >= 1,
+            "or_opt_max_len",
+            self.or_opt_max_len,
+            "must be ≥ 1",
+        )?;
+        require(self.window >= 1, "window", self.window, "must be ≥ 1")?;
+        require(
+            self.proxy_radius_mm.is_finite() && self.proxy_radius_mm > 0.0,
+            "proxy_radius_mm",
+            self.proxy_radius_mm,
+            "must be finite and > 0",
+        )?;
+        require(
+            self.proxy_lookback <= 16,
+            "proxy_lookback",
+            self.proxy_lookback,
+            "must be ≤ 16",
+        )?;
+        require(
+            self.proxy_weight.is_finite() && self.proxy_weight >= 0.0,
+            "proxy_weight",
+            self.proxy_weight,
+            "must be finite and ≥ 0",
+        )?;
+        Ok(())
+    }
+}
+
+/// The proxy's exposure table (module docs): for each contour `b` and each `a` among its
+/// neighbours (and `b`'s own containment partners, which are among them), how many of `b`'s
+/// metric check points lie within `radius` mm of `a`'s polyline.
+fn exposure_table(
+    eval: &Evaluator,
+    near: &[Vec<ContourId>],
+    radius: f64,
+) -> Vec<Vec<(ContourId, f64)>> {
+    let problem = eval.problem;
+    let seg = eval.thermal_params().segment_mm;
+    let checks: Vec<Vec<Point>> = problem
+        .contours
+        .iter()
+        .map(|c| {
+            let mut path = c.points.clone();
+            if let Some(&f) = c.points.first() {
+                path.push(f);
+            }
+            let len = c.perimeter();
+            let k = ((len / seg).ceil() as usize).max(1);
+            (0..k)
+                .map(|i| crate::thermal::point_along(&path, i as f64 * len / k as f64))
+                .collect()
+        })
+        .collect();
+    let seg_dist = |p: Point, a: Point, b: Point| {
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let l2 = d[0] * d[0] + d[1] * d[1];
+        let t = if l2 == 0.0 {
+            0.0
+        } else {
+            (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0)
+        };
+        dist(p, [a[0] + t * d[0], a[1] + t * d[1]])
+    };
+    (0..problem.contours.len())
+        .map(|b| {
+            near[b]
+                .iter()
+                .filter_map(|&a| {
+                    let pts = &problem.contours[a].points;
+                    let n = pts.len();
+                    let e = checks[b]
+                        .iter()
+                        .filter(|&&p| {
+                            (0..n).any(|i| seg_dist(p, pts[i], pts[(i + 1) % n]) < radius)
+                        })
+                        .count();
+                    (e > 0).then_some((a, e as f64))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Neighbour-list length of the idle-only moves.
+const NEAR: usize = 10;
+
+/// Progress report for the action feedback (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// LNS iterations done.
+    pub iteration: usize,
+    /// Best surrogate cost so far (the true cost is only known at the end).
+    pub best_cost: f64,
+}
+
+struct Search<'e, 'p> {
+    eval: &'e Evaluator<'p>,
+    seq: Vec<Cut>,
+    pos: Vec<usize>,
+    group_of: Vec<Option<usize>>,
+    successors: Vec<Vec<ContourId>>,
+    /// The `NEAR` contours nearest each contour (bounding-box centres), and the start.
+    near: Vec<Vec<ContourId>>,
+    near_start: Vec<ContourId>,
+    /// Cut length plus the dwell's equivalent, per contour, mm.
+    cut_len: Vec<f64>,
+    /// Heat retention per mm of cutting: `-ln(k_loss) / cell_mm`.
+    decay_per_mm: f64,
+    proxy_w: f64,
+    /// `exposure[b]`: `(a, e)` for every contour `a` near `b`, `e` the places of `b` the
+    /// overheat metric checks (pierce and segment starts) within `proxy_radius_mm` of `a`.
+    exposure: Vec<Vec<(ContourId, f64)>>,
+    lookback: usize,
+}
+
+impl<'e, 'p> Search<'e, 'p> {
+    fn point(&self, i: usize) -> Point {
+        if i == usize::MAX || i >= self.seq.len() {
+            self.eval.problem.start
+        } else {
+            self.seq[i].point(self.eval.problem)
+        }
+    }
+
+    /// Heat-proxy term between contour `a`, cut `gap_mm` of cutting before `b` starts, and
+    /// `b` (module docs): exposure × weight × ½^(gap / half-life).
+    fn proxy_pair(&self, a: ContourId, b: ContourId, gap_mm: f64) -> f64 {
+        match self.exposure[b].iter().find(|&&(x, _)| x == a) {
+            Some(&(_, e)) => self.proxy_w * e * (-gap_mm * self.decay_per_mm).exp(),
+            None => 0.0,
+        }
+    }
+
+    /// Cutting (plus dwell) between the middle of contour `c`'s cut and its end, mm.
+    fn half(&self, c: ContourId) -> f64 {
+        0.5 * self.cut_len[c]
+    }
+
+    /// Surrogate terms owned by position `i` (0..=n; n is the return to start): the idle
+    /// edge into it, its corner penalty and its heat-proxy look-back.
+    fn term(&self, i: usize) -> f64 {
+        let n = self.seq.len();
+        let prev = if i == 0 { usize::MAX } else { i - 1 };
+        let mut t = dist(self.point(prev), self.point(i));
+        if i < n {
+            let c = self.seq[i];
+            t += self.eval.corner_penalty(c);
+            if self.proxy_w > 0.0 {
+                let mut gap = 0.0;
+                for m in 1..=self.lookback.min(i) {
+                    let j = self.seq[i - m].contour;
+                    t += self.proxy_pair(j, c.contour, gap + self.half(j));
+                    gap += self.cut_len[j];
+                }
+            }
+        }
+        t
+    }
+
+    /// Sum of the terms that change when positions `lo..=hi` are permuted.
+    fn span_cost(&self, lo: usize, hi: usize) -> f64 {
+        let end = (hi + 1 + self.lookback).min(self.seq.len());
+        (lo..=end).map(|i| self.term(i)).sum()
+    }
+
+    fn total(&self) -> f64 {
+        (0..=self.seq.len()).map(|i| self.term(i)).sum()
+    }
+
+    fn reindex(&mut self, lo: usize, hi: usize) {
+        for i in lo..=hi {
+            self.pos[self.seq[i].contour] = i;
+        }
+    }
+
+    /// Local feasibility after permuting `lo..=hi` of a feasible order (module docs).
+    fn feasible_span(&self, lo: usize, hi: usize) -> bool {
+        let rules = &self.eval.problem.precedence;
+        for i in lo..=hi {
+            let c = self.seq[i].contour;
+            if rules.predecessors[c].iter().any(|&p| self.pos[p] > i) {
+                return false;
+            }
+            if let Some(g) = self.group_of[c] {
+                let members = &rules.groups[g];
+                let (mut a, mut b) = (usize::MAX, 0);
+                for &m in members {
+                    a = a.min(self.pos[m]);
+                    b = b.max(self.pos[m]);
+                }
+                if b - a + 1 != members.len() {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Applies a move on `lo..=hi`, keeps it if feasible and cheaper, else undoes it.
+    fn try_move(
+        &mut self,
+        lo: usize,
+        hi: usize,
+        apply: &dyn Fn(&mut [Cut]),
+        undo: &dyn Fn(&mut [Cut]),
+    ) -> bool {
+        let before = self.span_cost(lo, hi);
+        apply(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        if self.feasible_span(lo, hi) && self.span_cost(lo, hi) < before - 1e-9 {
+            return true;
+        }
+        undo(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        false
+    }
+
+    /// One sweep of Or-opt, 2-opt and pierce re-selection; whether anything improved.
+    fn sweep(&mut self, params: &ImproveParams) -> bool {
+        let n = self.seq.len();
+        let mut improved = false;
+        // Pierce re-selection.
+        for i in 0..n {
+            let c = self.seq[i];
+            let k = self.eval.problem.contours[c.contour]
+                .pierce_candidates
+                .len();
+            for alt in 0..k {
+                if alt == self.seq[i].pierce {
+                    continue;
+                }
+                let keep = self.seq[i].pierce;
+                let before = self.span_cost(i, i);
+                self.seq[i].pierce = alt;
+                if self.span_cost(i, i) < before - 1e-9 {
+                    improved = true;
+                } else {
+                    self.seq[i].pierce = keep;
+                }
+            }
+        }
+        // Or-opt: move run i..i+len after position j (forward) or before j (backward).
+        for len in 1..=params.or_opt_max_len.min(n) {
+            let mut i = 0;
+            while i + len <= n {
+                for j in (i + len)..(i + len + params.window).min(n) {
+                    let (lo, hi) = (i, j);
+                    if self.try_move(lo, hi, &|s| s.rotate_left(len), &|s| s.rotate_right(len)) {
+                        improved = true;
+                        break;
+                    }
+                }
+                for j in i.saturating_sub(params.window)..i {
+                    let (lo, hi) = (j, i + len - 1);
+                    if self.try_move(lo, hi, &|s| s.rotate_right(len), &|s| s.rotate_left(len)) {
+                        improved = true;
+                        break;
+                    }
+                }
+                i += 1;
+            }
+        }
+        // 2-opt: reverse i..=j.
+        for i in 0..n {
+            for j in (i + 1)..(i + 1 + params.window).min(n) {
+                if self.try_move(i, j, &|s| s.reverse(), &|s| s.reverse()) {
+                    improved = true;
+                }
+            }
+        }
+        debug_assert_eq!(
+            self.eval.problem.precedence.check_order(&self.order()),
+            Ok(())
+        );
+        improved
+    }
+
+    fn order(&self) -> Vec<ContourId> {
+        self.seq.iter().map(|c| c.contour).collect()
+    }
+
+    fn local_search(&mut self, params: &ImproveParams, deadline: &dyn Fn() -> bool) {
+        if self.proxy_w == 0.0 {
+            // Idle cost only: neighbour-list moves with O(1) deltas, to a local optimum.
+            for _ in 0..params.local_sweeps * 8 {
+                if !self.neighbour_sweep() || deadline() {
+                    break;
+                }
+            }
+        }
+        for _ in 0..params.local_sweeps {
+            if !self.sweep(params) || deadline() {
+                break;
+            }
+        }
+    }
+
+    /// Point at position `i`, with −1 and `n` the start point.
+    fn pt(&self, i: isize) -> Point {
+        if i < 0 {
+            self.eval.problem.start
+        } else {
+            self.point(i as usize)
+        }
+    }
+
+    /// Applies `apply` to `lo..=hi` if it is feasible (else undoes it with `undo`).
+    fn commit_if_feasible(
+        &mut self,
+        lo: usize,
+        hi: usize,
+        apply: &dyn Fn(&mut [Cut]),
+        undo: &dyn Fn(&mut [Cut]),
+    ) -> bool {
+        apply(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        if self.feasible_span(lo, hi) {
+            return true;
+        }
+        undo(&mut self.seq[lo..=hi]);
+        self.reindex(lo, hi);
+        false
+    }
+
+    /// One sweep of 2-opt and Or-opt over spatial neighbour lists (any sequence distance),
+    /// idle-length deltas in O(1); only valid without the heat proxy. Whether it improved.
+    fn neighbour_sweep(&mut self) -> bool {
+        let n = self.seq.len() as isize;
+        let mut improved = false;
+        let eps = 1e-9;
+        // 2-opt: new edges P(a)–P(b) and P(a+1)–P(b+1), reversing a+1..=b.
+        for a in -1..n - 1 {
+            let ca = if a < 0 {
+                None
+            } else {
+                Some(self.seq[a as usize].contour)
+            };
+            let near = match ca {
+                Some(c) => self.near[c].clone(),
+                None => self.near_start.clone(),
+            };
+            for &v in near.iter() {
+                let b = self.pos[v] as isize;
+                let (e1, e2) = if b > a { (a, b) } else { (b, a) };
+                if e2 - e1 < 2 {
+                    continue;
+                }
+                let delta = dist(self.pt(e1), self.pt(e2)) + dist(self.pt(e1 + 1), self.pt(e2 + 1))
+                    - dist(self.pt(e1), self.pt(e1 + 1))
+                    - dist(self.pt(e2), self.pt(e2 + 1));
+                if delta < -eps
+                    && self.commit_if_feasible(
+                        (e1 + 1) as usize,
+                        e2 as usize,
+                        &|s| s.reverse(),
+                        &|s| s.reverse(),
+                    )
+                {
+                    improved = true;
+                    break;
+                }
+            }
+        }
+        // Or-opt: move seq[i..i+len] between q and q+1, either way round.
+        for len in 1..=3isize {
+            let mut i = 0isize;
+            while i + len <= n {
+                let first = self.seq[i as usize].contour;
+                let (pf, pl) = (self.pt(i), self.pt(i + len - 1));
+                let (pp, pn) = (
+                    self.pt(i - 1),
+                    self.pt(if i + len == n { -1 } else { i + len }),
+                );
+                let gain = dist(pp, pf) + dist(pl, pn) - dist(pp, pn);
+                let mut done = false;
+                for &v in self.near[first].clone().iter() {
+                    let b = self.pos[v] as isize;
+                    for q in [b, b - 1] {
+                        if q >= i - 1 && q < i + len {
+                            continue;
+                        }
+                        let (qa, qb) = (self.pt(q), self.pt(if q + 1 == n { -1 } else { q + 1 }));
+                        let fwd = dist(qa, pf) + dist(pl, qb) - dist(qa, qb);
+                        let rev = dist(qa, pl) + dist(pf, qb) - dist(qa, qb);
+                        let (add, reversed) = if rev < fwd { (rev, true) } else { (fwd, false) };
+                        if add - gain >= -eps {
+                            continue;
+                        }
+                        let l = len as usize;
+                        let ok = if q > i {
+                            let (lo, hi) = (i as usize, q as usize);
+                            self.commit_if_feasible(
+                                lo,
+                                hi,
+                                &|s: &mut [Cut]| {
+                                    s.rotate_left(l);
+                                    if reversed {
+                                        let m = s.len();
+                                        s[m - l..].reverse();
+                                    }
+                                },
+                                &|s: &mut [Cut]| {
+                                    if reversed {
+                                        let m = s.len();
+                                        s[m - l..].reverse();
+                                    }
+                                    s.rotate_right(l);
+                                },
+                            )
+                        } else {
+                            let (lo, hi) = ((q + 1) as usize, (i + len - 1) as usize);
+                            self.commit_if_feasible(
+                                lo,
+                                hi,
+                                &|s: &mut [Cut]| {
+                                    s.rotate_right(l);
+                                    if reversed {
+                                        s[..l].reverse();
+                                    }
+                                },
+                                &|s: &mut [Cut]| {
+                                    if reversed {
+                                        s[..l].reverse();
+                                    }
+                                    s.rotate_left(l);
+                                },
+                            )
+                        };
+                        if ok {
+                            improved = true;
+                            done = true;
+                            break;
+                        }
+                    }
+                    if done {
+                        break;
+                    }
+                }
+                i += 1;
+            }
+        }
+        debug_assert_eq!(
+            self.eval.problem.precedence.check_order(&self.order()),
+            Ok(())
+        );
+        improved
+    }
+
+    /// One remove-and-reinsert step; `false` (and the order unchanged) if no feasible
+    /// reinsertion was found.
+    fn lns_step(&mut self, rng: &mut ChaCha8Rng, k: usize) -> bool {
+        let n = self.seq.len();
+        if n < 2 {
+            return false;
+        }
+        let problem = self.eval.problem;
+        let rules = &problem.precedence;
+        let seed_pos = rng.random_range(0..n);
+        let sp = self.point(seed_pos);
+        // The k cuts nearest the seed (ties by position: deterministic).
+        let mut by_dist: Vec<(f64, usize)> = (0..n).map(|i| (dist(sp, self.point(i)), i)).collect();
+        let k = k.min(n - 1).max(1);
+        by_dist.select_nth_unstable_by(k - 1, |a, b| {
+            a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
+        });
+        let mut removed: Vec<usize> = by_dist[..k].iter().map(|&(_, i)| i).collect();
+        removed.sort_unstable();
+        let saved = self.seq.clone();
+        let out: Vec<Cut> = removed.iter().map(|&i| self.seq[i]).collect();
+        let mut is_removed = vec![false; problem.contours.len()];
+        for c in &out {
+            is_removed[c.contour] = true;
+        }
+        self.seq.retain(|c| !is_removed[c.contour]);
+        let m = self.seq.len();
+        self.reindex(0, m.saturating_sub(1));
+        for c in &out {
+            let c = c.contour;
+            // Feasible insertion indices q (insert before seq[q]).
+            let lo = rules.predecessors[c]
+                .iter()
+                .filter(|&&p| !is_removed[p])
+                .map(|&p| self.pos[p] + 1)
+                .max()
+                .unwrap_or(0);
+            let hi = self.successors[c]
+                .iter()
+                .filter(|&&s| !is_removed[s])
+                .map(|&s| self.pos[s])
+                .min()
+                .unwrap_or(self.seq.len());
+            let run = self.group_of[c].and_then(|g| {
+                let present: Vec<usize> = rules.groups[g]
+                    .iter()
+                    .filter(|&&x| x != c && !is_removed[x])
+                    .map(|&x| self.pos[x])
+                    .collect();
+                (!present.is_empty()).then(|| {
+                    (
+                        *present.iter().min().unwrap_or(&0),
+                        *present.iter().max().unwrap_or(&0) + 1,
+                    )
+                })
+            });
+            let (lo, hi) = match run {
+                Some((a, b)) => (lo.max(a), hi.min(b)),
+                None => (lo, hi),
+            };
+            let mut best: Option<(f64, usize, usize)> = None;
+            for q in lo..=hi.min(self.seq.len()) {
+                // Not strictly inside another group's run.
+                if q > 0 && q < self.seq.len() {
+                    let (a, b) = (
+                        self.group_of[self.seq[q - 1].contour],
+                        self.group_of[self.seq[q].contour],
+                    );
+                    if a.is_some() && a == b && a != self.group_of[c] {
+                        continue;
+                    }
+                }
+                let prev = if q == 0 {
+                    problem.start
+                } else {
+                    self.point(q - 1)
+                };
+                let next = self.point(q);
+                for (kk, &p) in problem.contours[c].pierce_candidates.iter().enumerate() {
+                    let cut = Cut {
+                        contour: c,
+                        pierce: kk,
+                    };
+                    let mut d = dist(prev, p) + dist(p, next) - dist(prev, next)
+                        + self.eval.corner_penalty(cut);
+                    if self.proxy_w > 0.0 {
+                        let mut gap = 0.0;
+                        for mm in 1..=self.lookback.min(q) {
+                            let j = self.seq[q - mm].contour;
+                            d += self.proxy_pair(j, c, gap + self.half(j));
+                            gap += self.cut_len[j];
+                        }
+                        let mut gap = self.half(c);
+                        for mm in 1..=self.lookback.min(self.seq.len() - q) {
+                            let j = self.seq[q + mm - 1].contour;
+                            d += self.proxy_pair(c, j, gap);
+                            gap += self.cut_len[j];
+                        }
+                    }
+                    if best.is_none_or(|b| d < b.0) {
+                        best = Some((d, q, kk));
+                    }
+                }
+            }
+            let Some((_, q, kk)) = best else {
+                self.seq = saved;
+                let n = self.seq.len();
+                self.reindex(0, n - 1);
+                return false;
+            };
+            self.seq.insert(
+                q,
+                Cut {
+                    contour: c,
+                    pierce: kk,
+                },
+            );
+            is_removed[c] = false;
+            let len = self.seq.len();
+            self.reindex(q, len - 1);
+        }
+        if rules.check_order(&self.order()).is_err() {
+            self.seq = saved;
+            let n = self.seq.len();
+            self.reindex(0, n - 1);
+            return false;
+        }
+        true
+    }
+}
+
+/// Improves `start` (module docs), calling `feedback` after every LNS iteration.
+///
+/// # Errors
+/// An invalid [`ImproveParams`] field, or a start plan naming a contour or pierce candidate
+/// the problem does not have (field `start.cuts`).
+pub fn improve(
+    eval: &Evaluator,
+    start: &CutPlan,
+    params: &ImproveParams,
+    mut feedback: impl FnMut(Progress),
+) -> Result<CutPlan, ParamError> {
+    params.validate()?;
+    let problem = eval.problem;
+    let n = problem.contours.len();
+    if let Some(c) = start.cuts.iter().find(|c| {
+        problem
+            .contours
+            .get(c.contour)
+            .is_none_or(|k| c.pierce >= k.pierce_candidates.len())
+    }) {
+        return Err(ParamError::Invalid {
+            field: "start.cuts",
+            value: format!("{c:?}"),
+            reason: "names a contour or pierce candidate the problem does not have",
+        });
+    }
+    if start.cuts.len() < 2 || problem.precedence.check_order(&start.order()).is_err() {
+        return Ok(start.clone());
+    }
+    let t0 = Instant::now();
+    let budget = params.time_budget_ms;
+    let deadline = || budget > 0 && t0.elapsed().as_millis() as u64 >= budget;
+    let mut successors = vec![Vec::new(); n];
+    for (c, preds) in problem.precedence.predecessors.iter().enumerate() {
+        for &p in preds {
+            successors[p].push(c);
+        }
+    }
+    let bbox: Vec<[f64; 4]> = problem
+        .contours
+        .iter()
+        .map(|c| {
+            c.points
+                .iter()
+                .fold([f64::MAX, f64::MAX, f64::MIN, f64::MIN], |b, p| {
+                    [
+                        b[0].min(p[0]),
+                        b[1].min(p[1]),
+                        b[2].max(p[0]),
+                        b[3].max(p[1]),
+                    ]
+                })
+        })
+        .collect();
+    let centre = |b: &[f64; 4]| [(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0];
+    let nearest_to = |p: Point, skip: Option<usize>, k: usize| {
+        let mut d: Vec<(f64, usize)> = bbox
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| Some(j) != skip)
+            .map(|(j, b)| (dist(p, centre(b)), j))
+            .collect();
+        let k = k.min(d.len());
+        if k > 0 && k < d.len() {
+            d.select_nth_unstable_by(k - 1, |a, b| {
+                a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
+            });
+        }
+        d.truncate(k);
+        d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+        d.into_iter().map(|(_, j)| j).collect::<Vec<_>>()
+    };
+    let near = (0..n)
+        .map(|c| nearest_to(centre(&bbox[c]), Some(c), NEAR))
+        .collect();
+    let near_start = nearest_to(problem.start, None, NEAR);
+    let exposure = if eval.cost_params().thermal {
+        let wide: Vec<Vec<ContourId>> = (0..n)
+            .map(|c| nearest_to(centre(&bbox[c]), Some(c), 2 * NEAR))
+            .collect();
+        exposure_table(eval, &wide, params.proxy_radius_mm)
+    } else {
+        vec![Vec::new(); n]
+    };
+    let mut s = Search {
+        near,
+        near_start,
+        eval,
+        seq: start.cuts.clone(),
+        pos: vec![0; n],
+        group_of: problem.precedence.group_of(),
+        successors,
+        proxy_w: if eval.cost_params().thermal {
+            eval.cost_params().w_overheat_mm * params.proxy_weight
+        } else {
+            0.0
+        },
+        cut_len: problem
+            .contours
+            .iter()
+            .map(|c| {
+                c.perimeter()
+                    + eval.thermal_params().pierce_dwell_s * eval.thermal_params().cut_speed_mm_s
+            })
+            .collect(),
+        decay_per_mm: std::f64::consts::LN_2 / params.proxy_half_life_mm,
+        exposure,
+        lookback: params.proxy_lookback,
+    };
+    s.reindex(0, n - 1);
+    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    s.local_search(params, &deadline);
+    let mut cur = s.total();
+    let mut best = (cur, s.seq.clone());
+    for iteration in 0..params.max_iterations {
+        if deadline() {
+            break;
+        }
+        let saved = s.seq.clone();
+        if s.lns_step(&mut rng, params.lns_remove) {
+            if s.proxy_w == 0.0 {
+                // Cheap O(1)-delta moves: polish every perturbation (iterated local search).
+                for _ in 0..20 {
+                    if !s.neighbour_sweep() {
+                        break;
+                    }
+                }
+            }
+            let cost = s.total();
+            if cost <= cur + 1e-9 {
+                cur = cost;
+                if cost < best.0 - 1e-9 {
+                    best = (cost, s.seq.clone());
+                }
+            } else {
+                s.seq = saved;
+                s.reindex(0, n - 1);
+            }
+        }
+        feedback(Progress {
+            iteration: iteration + 1,
+            best_cost: best.0,
+        });
+    }
+    // Polish the best order.
+    s.seq = best.1;
+    s.reindex(0, n - 1);
+    s.local_search(params, &deadline);
+    debug_assert_eq!(problem.precedence.check_order(&s.order()), Ok(()));
+    let plan = eval.evaluate(&s.seq);
+    Ok(if plan.cost <= start.cost {
+        plan
+    } else {
+        start.clone()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cost::CostParams;
+    use crate::fixtures::{grid, scattered};
+    use crate::policy::{construct, Policy};
+    use crate::precedence::PrecedenceMode;
+    use crate::thermal::ThermalParams;
+    use proptest::prelude::*;
+
+    fn quick() -> ImproveParams {
+        ImproveParams {
+            max_iterations: 30,
+            local_sweeps: 2,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn thermal_off_improvement_shortens_nearest_neighbour() {
+        let problem = scattered(120, 3);
+        let cost = CostParams {
+            thermal: false,
+            ..Default::default()
+        };
+        let eval = Evaluator::new(&problem, ThermalParams::default(), cost).unwrap();
+        let nn = construct(&eval, Policy::Nearest, 0).unwrap();
+        let mut reports = 0;
+        let better = improve(&eval, &nn, &ImproveParams::default(), |_| reports += 1).unwrap();
+        assert_eq!(reports, ImproveParams::default().max_iterations);
+        assert!(
+            better.idle_mm < 0.97 * nn.idle_mm,
+            "{} vs nearest {}",
+            better.idle_mm,
+            nn.idle_mm
+        );
+        assert_eq!(problem.precedence.check_order(&better.order()), Ok(()));
+    }
+
+    #[test]
+    fn improvement_is_deterministic_for_a_seed() {
+        let problem = grid(4, 3, 58.0, true, true, PrecedenceMode::Strict);
+        let eval =
+            Evaluator::new(&problem, ThermalParams::default(), CostParams::default()).unwrap();
+        let start = construct(&eval, Policy::Nearest, 0).unwrap();
+        let a = improve(&eval, &start, &quick(), |_| {}).unwrap();
+        let b = improve(&eval, &start, &quick(), |_| {}).unwrap();
+        assert_eq!(a, b);
+        assert!(a.cost <= start.cost);
+    }
+
+    #[test]
+    fn bad_params_name_the_field() {
+        let problem = grid(1, 1, 60.0, false, false, PrecedenceMode::Strict);
+        let eval =
+            Evaluator::new(&problem, ThermalParams::default(), CostParams::default()).unwrap();
+        let start = construct(&eval, Policy::Nearest, 0).unwrap();
+        let p = ImproveParams {
+            window: 0,
+            ..Default::default()
+        };
+        let e = improve(&eval, &start, &p, |_| {}).unwrap_err().to_string();
+        assert!(e.contains("window"), "{e}");
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Every contour cut once, no precedence violation in either mode, never worse than
+        /// the start, and the thermal evaluation is bit-for-bit repeatable.
+        #[test]
+        fn improvement_keeps_the_rules_and_never_worsens(
+            nx in 1usize..4, ny in 1usize..4, nest: bool, free: bool, strict: bool,
+            thermal: bool, policy in 0usize..5, seed in 0u64..1000,
+        ) {
+            let mode = if strict { PrecedenceMode::Strict } else { PrecedenceMode::Relaxed };
+            let problem = grid(nx, ny, 57.0, nest, free, mode);
+            prop_assert_eq!(problem.precedence.check_acyclic(), Ok(()));
+            let cost = CostParams { thermal, ..Default::default() };
+            let eval = Evaluator::new(&problem, ThermalParams::default(), cost).unwrap();
+            let start = construct(&eval, Policy::ALL[policy], seed).unwrap();
+            prop_assert_eq!(problem.precedence.check_order(&start.order()), Ok(()));
+            // A thermal policy's own raster run is the evaluator's.
+            prop_assert_eq!(&eval.evaluate(&start.cuts), &start);
+            let params = ImproveParams { seed, ..quick() };
+            let better = improve(&eval, &start, &params, |_| {}).unwrap();
+            prop_assert_eq!(better.cuts.len(), problem.contours.len());
+            prop_assert_eq!(problem.precedence.check_order(&better.order()), Ok(()));
+            prop_assert!(better.cost <= start.cost);
+            let again = eval.evaluate(&better.cuts);
+            prop_assert_eq!(again.max_temp_c.to_bits(), better.max_temp_c.to_bits());
+            prop_assert_eq!(again, better);
+        }
+    }
+}

@@ -1,0 +1,1057 @@
+//! Discrete thermal raster of the sheet (seed 003 §A3; notes §A3 give the rule and our reading
+//! of it).
+//!
+//! The sheet `a × b` is a raster of square cells `cell_mm` wide. Each cell stores its
+//! temperature as the **excess over ambient** (°C), so the paper's `K_loss` is a plain
+//! multiplicative retention factor (1 = no loss).
+//!
+//! - **Heating** (seed 003 §A3): every cell the tool passes while piercing or cutting is set to
+//!   the melting temperature. It conducts as metal for the one spread step in which it is
+//!   melted (the molten kerf wall heats the metal around it), then becomes kerf "air" with the
+//!   low conductivity `k_air`. Idle moves do not heat.
+//! - **Spread** (seed 003 §A3, Fig. 4; notes §A3 interp): one step moves, between every cell
+//!   `P` and each of its 8 on-sheet neighbours `S`, the heat `k·(P.T − S.T)` from the hotter to
+//!   the colder, where `k = min(k(P), k(S))` is `k_conductivity` for metal and `k_air` for kerf.
+//!   For a hot cell among ambient neighbours this is exactly the paper's `ΔT = P.T·K_c` per
+//!   neighbour and `P.T − ΔT·count`; then every cell is multiplied by `k_loss`. Off-sheet
+//!   neighbours do not count (insulated sheet edge). The update is double-buffered, so it does
+//!   not depend on the order cells are visited and the result is bit-for-bit deterministic.
+//!   `k_conductivity ≤ 1/8` keeps it stable (no cell can give more than it has).
+//! - **Time** (notes §A3 interp): one spread step per tool advance of one cell, i.e. a time
+//!   step `dt = cell_mm / cut_speed_mm_s`. Idle moves at `rapid_speed_mm_s` and the pierce
+//!   dwell advance time by the matching number of steps.
+//! - **Overheat metric** (ours; seed 003 leaves "local overheating" undefined, notes §A3): when
+//!   a contour is pierced, before it adds any heat, count one overheat if the hottest cell
+//!   within `overheat_radius_cells` of the pierce point is at or above `t_max_c`, and one more
+//!   for every cut segment (the cut path split every `segment_mm` from the pierce point) whose
+//!   start has such a hot neighbourhood. Kerf cells count: a fresh kerf next to the pierce is
+//!   hot sheet.
+//! - **Maximum temperature**: the hottest *metal* cell seen during the whole cut (kerf cells are
+//!   at melting temperature by definition).
+//!
+//! Speed: only tiles of 16 × 16 cells that hold heat (above `epsilon_c`), and their
+//! neighbours, are updated; smaller excesses are rounded to ambient.
+
+use serde::{Deserialize, Serialize};
+
+use crate::problem::{distance, Contour, Point};
+
+/// Side of the square update tiles, cells.
+const TILE: usize = 16;
+
+/// Tile edge flags: heat on the left/right/bottom/top border of a tile, or anywhere.
+const LEFT: u8 = 1;
+const RIGHT: u8 = 2;
+const BOTTOM: u8 = 4;
+const TOP: u8 = 8;
+const ANY: u8 = 16;
+
+/// Edge flags of cell `(x, y)` in a tile `tw × th`.
+fn edge_bits(x: usize, y: usize, tw: usize, th: usize) -> u8 {
+    let mut e = ANY;
+    if x == 0 {
+        e |= LEFT;
+    }
+    if x + 1 == tw {
+        e |= RIGHT;
+    }
+    if y == 0 {
+        e |= BOTTOM;
+    }
+    if y + 1 == th {
+        e |= TOP;
+    }
+    e
+}
+
+/// All constants of the thermal raster (seed 003 §A3). The paper gives no numbers (notes
+/// §A0); the defaults are **ours**, for plasma cutting of ~6 mm mild steel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ThermalParams {
+    /// Raster cell size, mm. Default 4 (about two plasma kerf widths).
+    pub cell_mm: f64,
+    /// Ambient (initial sheet) temperature, °C. Default 20.
+    pub ambient_c: f32,
+    /// Melting temperature set in every cell the tool passes, °C. Default 1510 (mild steel).
+    pub t_melt_c: f32,
+    /// Overheat threshold `t_max`, °C. Default 300 (above this, mild steel parts visibly
+    /// distort and lose tolerance).
+    pub t_max_c: f32,
+    /// Safety margin `delta` below `t_max` used by the thermal policies, °C. Default 100.
+    pub delta_c: f32,
+    /// `K_conductivity` between metal cells per step, `0 ≤ k ≤ 1/8`. Default 0.1.
+    pub k_conductivity: f32,
+    /// Conductivity to and from kerf ("air") cells per step, `0 ≤ k_air ≤ k_conductivity`.
+    /// Default 0.01.
+    pub k_air: f32,
+    /// `K_loss` retention per step (1 = no loss), `0 < k ≤ 1`. Default 0.995 (with the
+    /// default 0.1 s step: heat halves in about 14 s, convection and radiation from a 6 mm
+    /// plate).
+    pub k_loss: f32,
+    /// Cutting feed, mm/s. Default 40 (2.4 m/min).
+    pub cut_speed_mm_s: f64,
+    /// Idle (rapid) speed, mm/s. Default 250 (15 m/min).
+    pub rapid_speed_mm_s: f64,
+    /// Pierce dwell, s; 0 disables it. Default 0.5.
+    pub pierce_dwell_s: f64,
+    /// Neighbourhood radius of the overheat test, cells (0 = the cell alone). Default 1.
+    pub overheat_radius_cells: usize,
+    /// Length of the cut segments counted by the overheat metric, mm. Default 20.
+    pub segment_mm: f64,
+    /// Excess below which a cell is rounded to ambient, °C. Default 1.
+    pub epsilon_c: f32,
+}
+
+impl Default for ThermalParams {
+    fn default() -> Self {
+        ThermalParams {
+            cell_mm: 4.0,
+            ambient_c: 20.0,
+            t_melt_c: 1510.0,
+            t_max_c: 300.0,
+            delta_c: 100.0,
+            k_conductivity: 0.1,
+            k_air: 0.01,
+            k_loss: 0.995,
+            cut_speed_mm_s: 40.0,
+            rapid_speed_mm_s: 250.0,
+            pierce_dwell_s: 0.5,
+            overheat_radius_cells: 1,
+            segment_mm: 20.0,
+            epsilon_c: 1.0,
+        }
+    }
+}
+
+/// A parameter out of range (names the field).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamError {
+    /// The field's value is not allowed.
+    #[error("parameter `{field}` = {value}: {reason}")]
+    Invalid {
+        /// The field, as spelled in the config.
+        field: &'static str,
+        /// Its value.
+        value: String,
+        /// What it must be.
+        reason: &'static str,
+    },
+}
+
+/// Returns a [`ParamError::Invalid`] for `field` unless `ok`.
+pub(crate) fn require(
+    ok: bool,
+    field: &'static str,
+    value: impl ToString,
+    reason: &'static str,
+) -> Result<(), ParamError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(ParamError::Invalid {
+            field,
+            value: value.to_string(),
+            reason,
+        })
+    }
+}
+
+impl ThermalParams {
+    /// Checks every field (seed 003 §A3 ranges; notes §A3 for `k_conductivity ≤ 1/8`).
+    ///
+    /// # Errors
+    /// The first field out of range, by name.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        require(
+            pos(self.cell_mm),
+            "cell_mm",
+            self.cell_mm,
+            "must be finite and > 0",
+        )?;
+        require(
+            self.ambient_c.is_finite(),
+            "ambient_c",
+            self.ambient_c,
+            "must be finite",
+        )?;
+        require(
+            self.t_melt_c.is_finite() && self.t_melt_c > self.ambient_c,
+            "t_melt_c",
+            self.t_melt_c,
+            "must be finite and above ambient_c",
+        )?;
+        require(
+            self.t_max_c.is_finite()
+                && self.t_max_c > self.ambient_c
+                && self.t_max_c <= self.t_melt_c,
+            "t_max_c",
+            self.t_max_c,
+            "must lie in (ambient_c, t_melt_c]",
+        )?;
+        require(
+            self.delta_c.is_finite() && self.delta_c >= 0.0,
+            "delta_c",
+            self.delta_c,
+            "must be finite and ≥ 0",
+        )?;
+        require(
+            (0.0..=0.125).contains(&self.k_conductivity),
+            "k_conductivity",
+            self.k_conductivity,
+            "must lie in [0, 1/8] (8 neighbours may not take more than the cell has)",
+        )?;
+        require(
+            self.k_air >= 0.0 && self.k_air <= self.k_conductivity,
+            "k_air",
+            self.k_air,
+            "must lie in [0, k_conductivity]",
+        )?;
+        require(
+            self.k_loss > 0.0 && self.k_loss <= 1.0,
+            "k_loss",
+            self.k_loss,
+            "must lie in (0, 1]",
+        )?;
+        require(
+            pos(self.cut_speed_mm_s),
+            "cut_speed_mm_s",
+            self.cut_speed_mm_s,
+            "must be finite and > 0",
+        )?;
+        require(
+            pos(self.rapid_speed_mm_s),
+            "rapid_speed_mm_s",
+            self.rapid_speed_mm_s,
+            "must be finite and > 0",
+        )?;
+        require(
+            self.pierce_dwell_s.is_finite() && self.pierce_dwell_s >= 0.0,
+            "pierce_dwell_s",
+            self.pierce_dwell_s,
+            "must be finite and ≥ 0",
+        )?;
+        require(
+            self.overheat_radius_cells <= 16,
+            "overheat_radius_cells",
+            self.overheat_radius_cells,
+            "must be ≤ 16",
+        )?;
+        require(
+            pos(self.segment_mm),
+            "segment_mm",
+            self.segment_mm,
+            "must be finite and > 0",
+        )?;
+        require(
+            self.epsilon_c.is_finite() && self.epsilon_c >= 0.0,
+            "epsilon_c",
+            self.epsilon_c,
+            "must be finite and ≥ 0",
+        )?;
+        Ok(())
+    }
+
+    /// The time step, s: one cell of cutting (notes §A3 interp).
+    pub fn dt_s(&self) -> f64 {
+        self.cell_mm / self.cut_speed_mm_s
+    }
+}
+
+/// One frame of the raster (for the `HeatMap` stream), seed 003 §A3.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    /// Spread steps since the start.
+    pub step: u64,
+    /// Simulated time, s.
+    pub time_s: f64,
+    /// Cells along x.
+    pub width: usize,
+    /// Cells along y.
+    pub height: usize,
+    /// Cell size, mm.
+    pub cell_mm: f64,
+    /// Ambient temperature, °C; add it to `excess_c` for absolute values.
+    pub ambient_c: f32,
+    /// Row-major (`y * width + x`, y up from the sheet origin) excess over ambient, °C.
+    pub excess_c: &'a [f32],
+}
+
+/// A callback receiving raster frames (seed 003 §A3 snapshots for the `HeatMap` stream).
+pub type FrameObserver<'a> = &'a mut dyn FnMut(&Frame);
+
+/// What cutting one contour did (seed 003 §A3, our overheat metric).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct CutThermal {
+    /// Hottest temperature round the pierce point when it was pierced, °C.
+    pub pierce_temp_c: f32,
+    /// 1 if the pierce was an overheat.
+    pub pierce_overheats: usize,
+    /// Cut segments that started hot.
+    pub segment_overheats: usize,
+}
+
+/// Totals of a simulated cut (seed 003 §A3).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ThermalOutcome {
+    /// Overheats (pierces plus cut segments, see the module docs).
+    pub overheats: usize,
+    /// Hottest metal cell over the whole cut, °C.
+    pub max_temp_c: f32,
+    /// Simulated time including idle moves and the return to start, s.
+    pub time_s: f64,
+    /// Spread steps.
+    pub steps: u64,
+    /// Cell updates (the simulation's work; tiles updated × tile area).
+    pub cells_updated: u64,
+    /// Per contour, in cutting order.
+    pub per_cut: Vec<CutThermal>,
+}
+
+/// The live raster while a sheet is cut (seed 003 §A3). Policies query it; the plan evaluator
+/// drives it through a whole order.
+pub struct ThermalSim<'a> {
+    params: ThermalParams,
+    width: usize,
+    height: usize,
+    melt_excess: f32,
+    t: Vec<f32>,
+    next: Vec<f32>,
+    /// Conductivity of each cell (metal or air).
+    kc: Vec<f32>,
+    /// Cells melted since the last step: they turn into air after it.
+    fresh: Vec<usize>,
+    tiles_x: usize,
+    tiles_y: usize,
+    active: Vec<bool>,
+    /// Edge flags per tile (heat on a border: its neighbour must be updated too).
+    edges: Vec<u8>,
+    /// Cells next to kerf: they need the mixed-conductivity update.
+    slow: Vec<bool>,
+    active_list: Vec<usize>,
+    stamp: Vec<u64>,
+    update_list: Vec<usize>,
+    step: u64,
+    cells_updated: u64,
+    time_s: f64,
+    max_metal_excess: f32,
+    tool: Point,
+    overheats: usize,
+    per_cut: Vec<CutThermal>,
+    observer: Option<(u64, FrameObserver<'a>)>,
+}
+
+impl<'a> ThermalSim<'a> {
+    /// A sheet `sheet[0] × sheet[1]` mm at ambient temperature, tool at `start`.
+    ///
+    /// # Errors
+    /// An invalid parameter, or a sheet size that is not finite and positive (field
+    /// `sheet`), or a raster over 10⁸ cells (field `cell_mm`).
+    pub fn new(sheet: [f64; 2], start: Point, params: &ThermalParams) -> Result<Self, ParamError> {
+        params.validate()?;
+        require(
+            sheet.iter().all(|v| v.is_finite() && *v > 0.0),
+            "sheet",
+            format!("{sheet:?}"),
+            "must be finite and > 0",
+        )?;
+        let width = (sheet[0] / params.cell_mm).ceil().max(1.0) as usize;
+        let height = (sheet[1] / params.cell_mm).ceil().max(1.0) as usize;
+        require(
+            (width as f64) * (height as f64) <= 1e8,
+            "cell_mm",
+            params.cell_mm,
+            "gives a raster over 10^8 cells for this sheet",
+        )?;
+        let n = width * height;
+        let tiles_x = width.div_ceil(TILE);
+        let tiles_y = height.div_ceil(TILE);
+        Ok(ThermalSim {
+            params: params.clone(),
+            width,
+            height,
+            melt_excess: params.t_melt_c - params.ambient_c,
+            t: vec![0.0; n],
+            next: vec![0.0; n],
+            kc: vec![params.k_conductivity; n],
+            fresh: Vec::new(),
+            tiles_x,
+            tiles_y,
+            active: vec![false; tiles_x * tiles_y],
+            edges: vec![0; tiles_x * tiles_y],
+            slow: vec![false; n],
+            active_list: Vec::new(),
+            stamp: vec![0; tiles_x * tiles_y],
+            update_list: Vec::new(),
+            step: 0,
+            cells_updated: 0,
+            time_s: 0.0,
+            max_metal_excess: 0.0,
+            tool: start,
+            overheats: 0,
+            per_cut: Vec::new(),
+            observer: None,
+        })
+    }
+
+    /// Calls `observer` with a [`Frame`] every `every` spread steps (`every ≥ 1`; 0 is
+    /// treated as 1).
+    pub fn with_frames(mut self, every: u64, observer: FrameObserver<'a>) -> Self {
+        self.observer = Some((every.max(1), observer));
+        self
+    }
+
+    /// Raster size `(width, height)`, cells.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The current raster as a frame.
+    pub fn frame(&self) -> Frame<'_> {
+        Frame {
+            step: self.step,
+            time_s: self.time_s,
+            width: self.width,
+            height: self.height,
+            cell_mm: self.params.cell_mm,
+            ambient_c: self.params.ambient_c,
+            excess_c: &self.t,
+        }
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &ThermalParams {
+        &self.params
+    }
+
+    /// Where the tool is.
+    pub fn tool(&self) -> Point {
+        self.tool
+    }
+
+    /// The cell holding `p` (clamped onto the sheet).
+    fn cell(&self, p: Point) -> (usize, usize) {
+        let c = |v: f64, n: usize| ((v / self.params.cell_mm).floor().max(0.0) as usize).min(n - 1);
+        (c(p[0], self.width), c(p[1], self.height))
+    }
+
+    /// Temperature of the cell holding `p`, °C.
+    pub fn temp_at_c(&self, p: Point) -> f32 {
+        let (x, y) = self.cell(p);
+        self.params.ambient_c + self.t[y * self.width + x]
+    }
+
+    /// Hottest cell within `overheat_radius_cells` of `p`, °C (the overheat test, module
+    /// docs).
+    pub fn hot_near_c(&self, p: Point) -> f32 {
+        let (x, y) = self.cell(p);
+        let r = self.params.overheat_radius_cells;
+        let mut m = 0.0f32;
+        for yy in y.saturating_sub(r)..=(y + r).min(self.height - 1) {
+            let row = yy * self.width;
+            for xx in x.saturating_sub(r)..=(x + r).min(self.width - 1) {
+                m = m.max(self.t[row + xx]);
+            }
+        }
+        self.params.ambient_c + m
+    }
+
+    /// Hottest metal cell so far, °C.
+    pub fn max_temp_c(&self) -> f32 {
+        self.params.ambient_c + self.max_metal_excess
+    }
+
+    /// Cell updates so far (tiles updated × tile area; the cost of the simulation).
+    pub fn cells_updated(&self) -> u64 {
+        self.cells_updated
+    }
+
+    /// Overheats so far.
+    pub fn overheats(&self) -> usize {
+        self.overheats
+    }
+
+    /// Simulated time so far, s.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    fn melt(&mut self, x: usize, y: usize) {
+        let (w, h) = (self.width, self.height);
+        let i = y * w + x;
+        self.t[i] = self.melt_excess;
+        self.fresh.push(i);
+        // Cells next to kerf take the slow (mixed-conductivity) path from now on.
+        for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+            for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                self.slow[yy * w + xx] = true;
+            }
+        }
+        let tile = (y / TILE) * self.tiles_x + x / TILE;
+        self.edges[tile] |= edge_bits(
+            x % TILE,
+            y % TILE,
+            TILE.min(w - x / TILE * TILE),
+            TILE.min(h - y / TILE * TILE),
+        );
+        if !self.active[tile] {
+            self.active[tile] = true;
+            self.active_list.push(tile);
+        }
+    }
+
+    /// Advances time by `n` spread steps.
+    pub fn spread_steps(&mut self, n: u64) {
+        for _ in 0..n {
+            self.spread();
+        }
+    }
+
+    /// One double-buffered spread step (module docs).
+    fn spread(&mut self) {
+        self.step += 1;
+        self.time_s = self.step as f64 * self.params.dt_s();
+        // The tiles to update: the active ones, and their neighbours across an edge that
+        // holds heat (heat moves one cell per step).
+        self.update_list.clear();
+        let stamp = self.step;
+        for &tile in &self.active_list {
+            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
+            let e = self.edges[tile];
+            for ny in ty.saturating_sub(1)..=(ty + 1).min(self.tiles_y - 1) {
+                for nx in tx.saturating_sub(1)..=(tx + 1).min(self.tiles_x - 1) {
+                    let need_x = match nx.cmp(&tx) {
+                        std::cmp::Ordering::Less => e & LEFT != 0,
+                        std::cmp::Ordering::Greater => e & RIGHT != 0,
+                        std::cmp::Ordering::Equal => true,
+                    };
+                    let need_y = match ny.cmp(&ty) {
+                        std::cmp::Ordering::Less => e & BOTTOM != 0,
+                        std::cmp::Ordering::Greater => e & TOP != 0,
+                        std::cmp::Ordering::Equal => true,
+                    };
+                    if !(need_x && need_y) {
+                        continue;
+                    }
+                    let n = ny * self.tiles_x + nx;
+                    if self.stamp[n] != stamp {
+                        self.stamp[n] = stamp;
+                        self.update_list.push(n);
+                    }
+                }
+            }
+        }
+        // Deterministic order regardless of how tiles were activated (the update itself is
+        // double-buffered, so order only matters for the active list).
+        self.update_list.sort_unstable();
+        let (w, h) = (self.width, self.height);
+        self.cells_updated += (self.update_list.len() * TILE * TILE) as u64;
+        let k_loss = self.params.k_loss;
+        let k_metal = self.params.k_conductivity;
+        let grid = Grid {
+            t: &self.t,
+            kc: &self.kc,
+            slow: &self.slow,
+            w,
+            h,
+            k_metal,
+        };
+        let next = &mut self.next;
+        for &tile in &self.update_list {
+            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let interior_cols = x0 > 0 && x1 < w;
+            for y in y0..y1 {
+                let border_row = y == 0 || y + 1 == h;
+                let row = y * w;
+                if !border_row && interior_cols {
+                    let out = &mut next[row + x0..row + x1];
+                    if grid.slow[row + x0..row + x1].iter().any(|&b| b) {
+                        grid.mixed_run(row + x0, row + x1, out, k_loss);
+                    } else {
+                        grid.metal_run(row + x0, row + x1, out, k_loss);
+                    }
+                    continue;
+                }
+                for x in x0..x1 {
+                    let v = if border_row || x == 0 || x + 1 == w {
+                        grid.generic_cell(x, y)
+                    } else {
+                        grid.interior_cell(y * w + x)
+                    };
+                    next[y * w + x] = v * k_loss;
+                }
+            }
+        }
+        // Fresh kerf turns into air after its one step as molten metal.
+        for &i in &self.fresh {
+            self.kc[i] = self.params.k_air;
+        }
+        self.fresh.clear();
+        // Copy back, round to ambient, track activity, hot edges and the metal maximum.
+        let eps = self.params.epsilon_c;
+        let k_air = self.params.k_air;
+        let mut max_metal = self.max_metal_excess;
+        self.active_list.clear();
+        for &tile in &self.update_list {
+            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let mut edges = 0u8;
+            for y in y0..y1 {
+                let row = y * w;
+                let mut row_any = false;
+                for i in row + x0..row + x1 {
+                    let mut v = self.next[i];
+                    if v < eps {
+                        v = 0.0;
+                    } else {
+                        row_any = true;
+                        // Metal cells (air cells hold kerf heat); equal k means no air.
+                        if self.kc[i] != k_air || k_air == k_metal {
+                            max_metal = max_metal.max(v);
+                        }
+                    }
+                    self.t[i] = v;
+                }
+                if row_any {
+                    edges |= ANY;
+                    if y == y0 {
+                        edges |= BOTTOM;
+                    }
+                    if y + 1 == y1 {
+                        edges |= TOP;
+                    }
+                    if self.t[row + x0] > 0.0 {
+                        edges |= LEFT;
+                    }
+                    if self.t[row + x1 - 1] > 0.0 {
+                        edges |= RIGHT;
+                    }
+                }
+            }
+            self.edges[tile] = edges;
+            self.active[tile] = edges != 0;
+            if edges != 0 {
+                self.active_list.push(tile);
+            }
+        }
+        self.max_metal_excess = max_metal;
+        if let Some((every, observer)) = self.observer.as_mut() {
+            if self.step.is_multiple_of(*every) {
+                let frame = Frame {
+                    step: self.step,
+                    time_s: self.time_s,
+                    width: self.width,
+                    height: self.height,
+                    cell_mm: self.params.cell_mm,
+                    ambient_c: self.params.ambient_c,
+                    excess_c: &self.t,
+                };
+                observer(&frame);
+            }
+        }
+    }
+
+    /// Spread steps for an idle move of `mm` (at least 0; rounded to the nearest step).
+    pub fn idle_steps(&self, mm: f64) -> u64 {
+        (mm / self.params.rapid_speed_mm_s / self.params.dt_s()).round() as u64
+    }
+
+    /// Idle move of the tool to `p`: no heating, time advances (seed 003 §A3).
+    pub fn travel_to(&mut self, p: Point) {
+        let steps = self.idle_steps(distance(self.tool, p));
+        self.spread_steps(steps);
+        self.tool = p;
+    }
+
+    /// Pierces `contour` at `pierce` (after an idle move there) and cuts once round it,
+    /// returning what the overheat metric counted (module docs).
+    pub fn cut_contour(&mut self, contour: &Contour, pierce: Point) -> CutThermal {
+        self.travel_to(pierce);
+        let path = cut_path(contour, pierce);
+        // The overheat test, before this contour adds heat.
+        let t_max = self.params.t_max_c;
+        let pierce_temp_c = self.hot_near_c(pierce);
+        let mut result = CutThermal {
+            pierce_temp_c,
+            pierce_overheats: usize::from(pierce_temp_c >= t_max),
+            segment_overheats: 0,
+        };
+        let seg = self.params.segment_mm;
+        let total: f64 = path.windows(2).map(|w| distance(w[0], w[1])).sum();
+        let mut s = seg;
+        while s < total {
+            if self.hot_near_c(point_along(&path, s)) >= t_max {
+                result.segment_overheats += 1;
+            }
+            s += seg;
+        }
+        self.overheats += result.pierce_overheats + result.segment_overheats;
+        // Pierce: melt and dwell.
+        let (x, y) = self.cell(pierce);
+        self.melt(x, y);
+        let dwell = (self.params.pierce_dwell_s / self.params.dt_s()).round() as u64;
+        self.spread_steps(dwell);
+        // Cut: one cell per step along the path.
+        let step_mm = self.params.cell_mm;
+        for w in path.windows(2) {
+            let len = distance(w[0], w[1]);
+            let n = (len / step_mm).ceil() as usize;
+            for k in 1..=n {
+                let f = k as f64 / n as f64;
+                let p = [
+                    w[0][0] + f * (w[1][0] - w[0][0]),
+                    w[0][1] + f * (w[1][1] - w[0][1]),
+                ];
+                let (x, y) = self.cell(p);
+                self.melt(x, y);
+                self.spread();
+            }
+        }
+        self.tool = pierce;
+        self.per_cut.push(result);
+        result
+    }
+
+    /// Ends the cut: idle return to `end` and the totals.
+    pub fn finish(mut self, end: Point) -> ThermalOutcome {
+        self.travel_to(end);
+        if std::env::var_os("SEQ_DEBUG_CELLS").is_some() {
+            eprintln!(
+                "steps {} cells/step {}",
+                self.step,
+                self.cells_updated / self.step.max(1)
+            );
+        }
+        ThermalOutcome {
+            overheats: self.overheats,
+            max_temp_c: self.max_temp_c(),
+            time_s: self.time_s,
+            steps: self.step,
+            cells_updated: self.cells_updated,
+            per_cut: std::mem::take(&mut self.per_cut),
+        }
+    }
+}
+
+/// Borrowed raster for one spread step (keeps the reads apart from the write buffer).
+struct Grid<'g> {
+    t: &'g [f32],
+    kc: &'g [f32],
+    slow: &'g [bool],
+    w: usize,
+    h: usize,
+    k_metal: f32,
+}
+
+impl Grid<'_> {
+    /// `T + Σ k·(T_S − T)` over on-sheet neighbours (before `k_loss`), any cell.
+    fn generic_cell(&self, x: usize, y: usize) -> f32 {
+        let (w, h) = (self.w, self.h);
+        let i = y * w + x;
+        let (ti, ki) = (self.t[i], self.kc[i]);
+        let mut acc = 0.0f32;
+        for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+            for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                let j = yy * w + xx;
+                if j != i {
+                    acc += ki.min(self.kc[j]) * (self.t[j] - ti);
+                }
+            }
+        }
+        ti + acc
+    }
+
+    /// A run of interior metal cells `a..b` of one row (none next to kerf), written with
+    /// `k_loss` applied: `(T + k(Σ neighbours − 8·T))·k_loss`, in a form the compiler
+    /// vectorises.
+    fn metal_run(&self, a: usize, b: usize, out: &mut [f32], k_loss: f32) {
+        let w = self.w;
+        let t = self.t;
+        let n = b - a;
+        let (u, m, d) = (
+            &t[a - w - 1..b - w + 1],
+            &t[a - 1..b + 1],
+            &t[a + w - 1..b + w + 1],
+        );
+        let k = self.k_metal;
+        let (u, m, d) = (&u[..n + 2], &m[..n + 2], &d[..n + 2]);
+        for (x, o) in out[..n].iter_mut().enumerate() {
+            let ti = m[x + 1];
+            let s = u[x] + u[x + 1] + u[x + 2] + m[x] + m[x + 2] + d[x] + d[x + 1] + d[x + 2];
+            *o = (ti + k * (s - 8.0 * ti)) * k_loss;
+        }
+    }
+
+    /// A run of interior cells `a..b` of one row with any mix of metal and kerf:
+    /// `(T + Σ min(k_P, k_S)(T_S − T))·k_loss`, in a form the compiler vectorises.
+    fn mixed_run(&self, a: usize, b: usize, out: &mut [f32], k_loss: f32) {
+        let w = self.w;
+        let (t, kc) = (self.t, self.kc);
+        let n = b - a;
+        let (u, m, d) = (
+            &t[a - w - 1..b - w + 1],
+            &t[a - 1..b + 1],
+            &t[a + w - 1..b + w + 1],
+        );
+        let (ku, km, kd) = (
+            &kc[a - w - 1..b - w + 1],
+            &kc[a - 1..b + 1],
+            &kc[a + w - 1..b + w + 1],
+        );
+        // Known lengths let the compiler drop the bounds checks and vectorise.
+        let (u, m, d, ku, km, kd) = (
+            &u[..n + 2],
+            &m[..n + 2],
+            &d[..n + 2],
+            &ku[..n + 2],
+            &km[..n + 2],
+            &kd[..n + 2],
+        );
+        for (x, o) in out[..n].iter_mut().enumerate() {
+            let (ti, ki) = (m[x + 1], km[x + 1]);
+            let f = |tj: f32, kj: f32| ki.min(kj) * (tj - ti);
+            let acc = f(u[x], ku[x])
+                + f(u[x + 1], ku[x + 1])
+                + f(u[x + 2], ku[x + 2])
+                + f(m[x], km[x])
+                + f(m[x + 2], km[x + 2])
+                + f(d[x], kd[x])
+                + f(d[x + 1], kd[x + 1])
+                + f(d[x + 2], kd[x + 2]);
+            *o = (ti + acc) * k_loss;
+        }
+    }
+
+    /// The same for a cell off the sheet border, unrolled.
+    #[inline]
+    fn interior_cell(&self, i: usize) -> f32 {
+        let w = self.w;
+        let t = self.t;
+        let ti = t[i];
+        let (u, m, d) = (
+            &t[i - w - 1..i - w + 2],
+            &t[i - 1..i + 2],
+            &t[i + w - 1..i + w + 2],
+        );
+        if !self.slow[i] {
+            // Metal among metal: k(Σ neighbours − 8·T).
+            let s = u[0] + u[1] + u[2] + m[0] + m[2] + d[0] + d[1] + d[2];
+            return ti + self.k_metal * (s - 8.0 * ti);
+        }
+        let kc = self.kc;
+        let ki = kc[i];
+        let (ku, km, kd) = (
+            &kc[i - w - 1..i - w + 2],
+            &kc[i - 1..i + 2],
+            &kc[i + w - 1..i + w + 2],
+        );
+        let acc = ki.min(ku[0]) * (u[0] - ti)
+            + ki.min(ku[1]) * (u[1] - ti)
+            + ki.min(ku[2]) * (u[2] - ti)
+            + ki.min(km[0]) * (m[0] - ti)
+            + ki.min(km[2]) * (m[2] - ti)
+            + ki.min(kd[0]) * (d[0] - ti)
+            + ki.min(kd[1]) * (d[1] - ti)
+            + ki.min(kd[2]) * (d[2] - ti);
+        ti + acc
+    }
+}
+
+/// The closed cut path of `contour` from `pierce` round and back to it: the pierce point is
+/// projected onto the nearest polyline edge (seed 003 §A1: a cut starts and ends at its
+/// pierce point). Degenerate contours (fewer than 2 points) give `[pierce, pierce]`.
+pub fn cut_path(contour: &Contour, pierce: Point) -> Vec<Point> {
+    let pts = &contour.points;
+    let n = pts.len();
+    if n < 2 {
+        return vec![pierce, pierce];
+    }
+    let mut best = (f64::INFINITY, 0usize, pierce);
+    for i in 0..n {
+        let (a, b) = (pts[i], pts[(i + 1) % n]);
+        let q = project(a, b, pierce);
+        let d = distance(q, pierce);
+        if d < best.0 {
+            best = (d, i, q);
+        }
+    }
+    let (_, i, q) = best;
+    let mut path = Vec::with_capacity(n + 3);
+    path.push(pierce);
+    if distance(q, pierce) > 0.0 {
+        path.push(q);
+    }
+    for k in 1..=n {
+        path.push(pts[(i + k) % n]);
+    }
+    path.push(q);
+    if distance(q, pierce) > 0.0 {
+        path.push(pierce);
+    }
+    path
+}
+
+/// The point of segment `a–b` nearest to `p` (`a` if the segment is degenerate).
+fn project(a: Point, b: Point, p: Point) -> Point {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let l2 = d[0] * d[0] + d[1] * d[1];
+    if l2 == 0.0 {
+        return a;
+    }
+    let t = (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0);
+    [a[0] + t * d[0], a[1] + t * d[1]]
+}
+
+/// The point at arc length `s` along a polyline (its end if `s` is past it).
+pub(crate) fn point_along(path: &[Point], mut s: f64) -> Point {
+    for w in path.windows(2) {
+        let len = distance(w[0], w[1]);
+        if s <= len && len > 0.0 {
+            let f = s / len;
+            return [
+                w[0][0] + f * (w[1][0] - w[0][0]),
+                w[0][1] + f * (w[1][1] - w[0][1]),
+            ];
+        }
+        s -= len;
+    }
+    *path.last().unwrap_or(&[0.0, 0.0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::ContourRole;
+
+    fn square(x: f64, y: f64, s: f64) -> Contour {
+        Contour {
+            part: 0,
+            role: ContourRole::Outer,
+            points: vec![[x, y], [x + s, y], [x + s, y + s], [x, y + s]],
+            pierce_candidates: vec![[x, y]],
+        }
+    }
+
+    #[test]
+    fn bad_params_name_the_field() {
+        let p = ThermalParams {
+            k_conductivity: 0.2,
+            ..Default::default()
+        };
+        let e = p.validate().unwrap_err().to_string();
+        assert!(e.contains("k_conductivity"), "{e}");
+        let p = ThermalParams {
+            cut_speed_mm_s: 0.0,
+            ..Default::default()
+        };
+        assert!(p
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("cut_speed_mm_s"));
+        assert!(ThermalSim::new([0.0, 1.0], [0.0, 0.0], &ThermalParams::default()).is_err());
+    }
+
+    /// A lone hot cell among ambient neighbours gives each `ΔT = P.T·K_c` (seed 003 §A3).
+    #[test]
+    fn spread_matches_the_paper_for_a_hot_cell() {
+        let p = ThermalParams {
+            k_loss: 1.0,
+            epsilon_c: 0.0,
+            ..Default::default()
+        };
+        let mut sim = ThermalSim::new([40.0, 40.0], [0.0, 0.0], &p).unwrap();
+        sim.t[5 * 10 + 5] = 1000.0;
+        sim.active[0] = true;
+        sim.edges[0] = ANY;
+        sim.active_list.push(0);
+        sim.spread();
+        let dt = 1000.0 * p.k_conductivity;
+        assert!((sim.t[4 * 10 + 4] - dt).abs() < 1e-3);
+        assert!((sim.t[5 * 10 + 5] - (1000.0 - 8.0 * dt)).abs() < 1e-3);
+        // Heat is conserved with k_loss = 1.
+        let total: f32 = sim.t.iter().sum();
+        assert!((total - 1000.0).abs() < 1e-2, "{total}");
+    }
+
+    #[test]
+    fn cutting_heats_and_is_deterministic() {
+        let run = || {
+            let mut sim =
+                ThermalSim::new([200.0, 200.0], [0.0, 0.0], &ThermalParams::default()).unwrap();
+            let a = square(20.0, 75.0, 50.0);
+            let b = square(20.0, 20.0, 50.0);
+            sim.cut_contour(&a, [20.0, 75.0]);
+            let hot = sim.cut_contour(&b, [20.0, 70.0]);
+            (sim.frame().excess_c.to_vec(), hot, sim.finish([0.0, 0.0]))
+        };
+        let (t1, hot, o1) = run();
+        let (t2, _, o2) = run();
+        assert_eq!(
+            t1.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            t2.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        assert_eq!(o1, o2);
+        assert!(o1.max_temp_c > 300.0, "{}", o1.max_temp_c);
+        // The second square is pierced 5 mm from where the first one ended.
+        assert!(hot.pierce_overheats + hot.segment_overheats > 0, "{hot:?}");
+    }
+
+    /// The tiled, fast-path update agrees with a plain full-grid reference of the rule
+    /// (seed 003 §A3, module docs) after kerf cuts and many steps.
+    #[test]
+    fn tiled_update_matches_the_reference() {
+        let p = ThermalParams::default();
+        let mut sim = ThermalSim::new([150.0, 120.0], [0.0, 0.0], &p).unwrap();
+        sim.cut_contour(&square(2.0, 2.0, 60.0), [2.0, 2.0]);
+        sim.cut_contour(&square(70.0, 30.0, 40.0), [70.0, 30.0]);
+        let (w, h) = sim.size();
+        let mut t = sim.t.clone();
+        let kc = sim.kc.clone();
+        for _ in 0..40 {
+            let mut next = vec![0.0f32; w * h];
+            for y in 0..h {
+                for x in 0..w {
+                    let i = y * w + x;
+                    let mut acc = 0.0f32;
+                    for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
+                        for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
+                            let j = yy * w + xx;
+                            if j != i {
+                                acc += kc[i].min(kc[j]) * (t[j] - t[i]);
+                            }
+                        }
+                    }
+                    let v = (t[i] + acc) * p.k_loss;
+                    next[i] = if v < p.epsilon_c { 0.0 } else { v };
+                }
+            }
+            t = next;
+            sim.spread();
+        }
+        let worst = t
+            .iter()
+            .zip(&sim.t)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 0.01, "tiled vs reference differ by {worst} °C");
+        assert!(t.iter().any(|&v| v > 100.0));
+    }
+
+    #[test]
+    fn frames_arrive_every_n_steps() {
+        let mut frames = Vec::new();
+        let mut obs = |f: &Frame| frames.push(f.step);
+        let mut sim = ThermalSim::new([100.0, 100.0], [0.0, 0.0], &ThermalParams::default())
+            .unwrap()
+            .with_frames(10, &mut obs);
+        sim.cut_contour(&square(10.0, 10.0, 20.0), [10.0, 10.0]);
+        let out = sim.finish([0.0, 0.0]);
+        assert_eq!(frames.len() as u64, out.steps / 10);
+        assert!(frames.iter().all(|s| s % 10 == 0));
+    }
+}
