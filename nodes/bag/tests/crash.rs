@@ -25,7 +25,7 @@ fn status(i: u64) -> MachineStatus {
     }
 }
 
-/// In the child: writes statuses forever (small chunks, 2 ms apart) until killed.
+/// In the child: writes statuses (small chunks, small split files) until killed.
 #[test]
 fn crash_child() {
     let Ok(dir) = std::env::var(CHILD_ENV) else {
@@ -36,12 +36,21 @@ fn crash_child() {
         max_file_size: Some(16 * 1024),
         ..Default::default()
     };
-    let mut w = BagWriter::create(&dir, options).unwrap();
+    let dir = Path::new(&dir);
+    let mut w = BagWriter::create(dir, options).unwrap();
+    // Writes until the third split file holds complete chunks, then stops mid-file and says
+    // so; the parent kills it there, so the last file is never finished (killing at a random
+    // moment could land between two files, leaving nothing to repair).
+    let mut in_third_file = 0;
     for i in 0.. {
         w.write("/machine_status", &status(i), 1_000_000_000 + i * 1_000_000)
             .unwrap();
-        if i.is_multiple_of(50) {
-            std::thread::sleep(Duration::from_millis(2));
+        if dir.join("killed_2.mcap").exists() {
+            in_third_file += 1;
+            if in_third_file == 200 {
+                std::fs::write(dir.join("ready"), b"").unwrap();
+                std::thread::sleep(Duration::from_secs(120));
+            }
         }
     }
 }
@@ -58,11 +67,11 @@ fn sigkill_mid_write_then_repair() {
         .unwrap();
     // Kill once a few files have been split off and the current one holds chunks.
     let deadline = Instant::now() + Duration::from_secs(60);
-    while !bag.join("killed_2.mcap").exists() {
+    while !bag.join("ready").exists() {
         assert!(Instant::now() < deadline, "child wrote too little");
         std::thread::sleep(Duration::from_millis(5));
     }
-    std::thread::sleep(Duration::from_millis(100));
+    std::fs::remove_file(bag.join("ready")).unwrap();
     child.kill().unwrap(); // SIGKILL
     child.wait().unwrap();
 
