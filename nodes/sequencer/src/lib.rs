@@ -18,6 +18,8 @@
 //! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
 //!   (seed 003 §A4).
 //! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//! - [`toolpath`]: a plan as the `cell_msgs` `Toolpath` (travel and cut segments) and
+//!   `CutPlan` messages (notes §A6 outputs).
 //! - [`fixtures`]: hand-built grid instances for tests and the bench.
 //!
 //! Everything here is synchronous and free of ROS/DDS.
@@ -36,5 +38,6 @@ pub mod improve;
 pub mod plan;
 pub mod policy;
 pub mod thermal;
+pub mod toolpath;
 
 pub mod fixtures;
