@@ -18,6 +18,8 @@
 //! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
 //!   (seed 003 §A4).
 //! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//! - [`job`]: one job end to end (layout → plan → final simulation with raster frames), what
+//!   the `sequencer` node and `cell sheet` run.
 //! - [`toolpath`]: a plan as the `cell_msgs` `Toolpath` (travel and cut segments) and
 //!   `CutPlan` messages (notes §A6 outputs).
 //! - [`fixtures`]: hand-built grid instances for tests and the bench.
@@ -35,6 +37,7 @@ pub mod problem;
 
 pub mod cost;
 pub mod improve;
+pub mod job;
 pub mod plan;
 pub mod policy;
 pub mod thermal;
