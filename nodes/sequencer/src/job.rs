@@ -22,7 +22,7 @@ use crate::plan::CutPlan;
 use crate::policy::{construct, Policy};
 use crate::precedence::{PrecedenceMode, Violation};
 use crate::problem::Problem;
-use crate::thermal::{Frame, ParamError, ThermalParams, ThermalSim};
+use crate::thermal::{CutThermal, Frame, ParamError, ThermalParams, ThermalSim};
 
 /// Where the layout comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -229,6 +229,9 @@ pub struct SheetOutcome {
     pub problem: Problem,
     /// The final plan (metrics from the final simulation).
     pub plan: CutPlan,
+    /// What cutting each contour of `plan` did on the raster, in cut order (empty when the
+    /// thermal cost is off); overheats sit at the cuts' pierce points.
+    pub per_cut: Vec<CutThermal>,
     /// The construction's plan.
     pub constructed: CutPlan,
     /// Whether the improvement ran.
@@ -331,14 +334,23 @@ pub fn run(
 
     let t = Instant::now();
     progress(report(Phase::Simulation, &best));
-    let sim = ThermalSim::new(problem.sheet, problem.start, eval.thermal_params())?
-        .with_frames(frame_every.max(1), frame);
-    let plan = eval.evaluate_with(&best.cuts, sim);
+    let (plan, per_cut) = if job.cost.thermal {
+        let mut sim = ThermalSim::new(problem.sheet, problem.start, eval.thermal_params())?
+            .with_frames(frame_every.max(1), frame);
+        for c in &best.cuts {
+            sim.cut_contour(&problem.contours[c.contour], c.point(&problem));
+        }
+        let out = sim.finish(problem.start);
+        (eval.assemble(&best.cuts, Some(&out)), out.per_cut)
+    } else {
+        (eval.assemble(&best.cuts, None), Vec::new())
+    };
     phases.push(figures(Phase::Simulation, t, &plan));
     progress(report(Phase::Simulation, &plan));
     Ok(SheetOutcome {
         problem,
         plan,
+        per_cut,
         constructed,
         improved: job.improve,
         phases,
@@ -389,6 +401,13 @@ mod tests {
         assert!(phases.contains(&Phase::Improvement));
         assert_eq!(*phases.last().unwrap(), Phase::Simulation);
         assert!(out.plan.cost <= out.constructed.cost + 1e-9);
+        assert_eq!(out.per_cut.len(), out.plan.cuts.len());
+        let per_cut: usize = out
+            .per_cut
+            .iter()
+            .map(|c| c.pierce_overheats + c.segment_overheats)
+            .sum();
+        assert_eq!(per_cut, out.plan.overheats);
     }
 
     #[test]

@@ -24,7 +24,9 @@
 //!   `CutPlan` messages (notes §A6 outputs).
 //! - [`fixtures`]: hand-built grid instances for tests and the bench.
 //!
-//! Everything here is synchronous and free of ROS/DDS.
+//! - [`node`]: the `sequencer` node (the `sequence_sheet` action), a thin adapter over [`job`].
+//!
+//! Everything but [`node`] is synchronous and free of ROS/DDS.
 
 #![warn(missing_docs)]
 
@@ -38,6 +40,7 @@ pub mod problem;
 pub mod cost;
 pub mod improve;
 pub mod job;
+pub mod node;
 pub mod plan;
 pub mod policy;
 pub mod thermal;
