@@ -204,7 +204,10 @@ fn cell_sheet_writes_plan_program_and_report() {
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["idle_length_mm"].as_f64(), Some(plan.idle_length_mm));
     assert_eq!(report["cut_length_mm"].as_f64(), Some(plan.cut_length_mm));
-    assert_eq!(report["overheats"].as_u64(), Some(u64::from(plan.overheats)));
+    assert_eq!(
+        report["overheats"].as_u64(),
+        Some(u64::from(plan.overheats))
+    );
     assert_eq!(
         report["max_temperature_c"].as_f64(),
         Some(plan.max_temperature_c)

@@ -214,8 +214,7 @@ pub fn run(a: SheetArgs) -> ExitCode {
             return failure(e);
         }
     }
-    if let Err(e) = cell_emitter::program::write_atomically(&a.out.join("program.ngc"), &ngc.text)
-    {
+    if let Err(e) = cell_emitter::program::write_atomically(&a.out.join("program.ngc"), &ngc.text) {
         return failure(e);
     }
     println!(

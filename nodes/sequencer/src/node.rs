@@ -113,7 +113,13 @@ pub fn goal_to_job(
     goal: &SequenceSheetGoal,
     p: &SequencerParams,
 ) -> Result<(SheetJob, ToolpathOptions), String> {
-    let or = |g: &str, d: &str| if g.is_empty() { d.to_string() } else { g.to_string() };
+    let or = |g: &str, d: &str| {
+        if g.is_empty() {
+            d.to_string()
+        } else {
+            g.to_string()
+        }
+    };
     let precedence = job::parse_precedence(&or(&goal.precedence, &p.precedence))?;
     let pierce = PierceMode::parse(&or(&goal.pierce, &p.pierce))?;
     let policy = job::parse_policy(&or(&goal.policy, &p.policy))?;
@@ -182,7 +188,11 @@ pub fn frame_to_heat_map(frame: &Frame, t_max_c: f32) -> HeatMap {
             z: 0.0,
         },
         threshold: t_max_c,
-        data: frame.excess_c.iter().map(|&e| e + frame.ambient_c).collect(),
+        data: frame
+            .excess_c
+            .iter()
+            .map(|&e| e + frame.ambient_c)
+            .collect(),
     }
 }
 
@@ -226,7 +236,10 @@ fn log_result(
     }
     sink.log_text(
         "/sheet/log",
-        &format!("{message} (max {:.0} °C above ambient)", plan.max_temperature_c),
+        &format!(
+            "{message} (max {:.0} °C above ambient)",
+            plan.max_temperature_c
+        ),
     );
 }
 
@@ -339,9 +352,10 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                             if let Some(rec) = node.rerun().stream() {
                                 if pr.phase == Phase::Improvement {
                                     rec.set_time_sequence("iteration", pr.iteration as i64);
-                                    if let Err(e) =
-                                        rec.log("/sheet/best_cost", &rerun::Scalars::single(pr.best_cost))
-                                    {
+                                    if let Err(e) = rec.log(
+                                        "/sheet/best_cost",
+                                        &rerun::Scalars::single(pr.best_cost),
+                                    ) {
                                         tracing::warn!("rerun: {e}");
                                     }
                                     rec.disable_timeline("iteration");
@@ -354,7 +368,9 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                                 best_idle_length_mm: pr.best_idle_mm,
                                 best_overheats: pr.best_overheats as u32,
                             };
-                            if let Err(e) = server.publish_feedback(executing.clone(), feedback).await {
+                            if let Err(e) =
+                                server.publish_feedback(executing.clone(), feedback).await
+                            {
                                 tracing::warn!("sequence_sheet: feedback {job_id}: {e:?}");
                             }
                         }
