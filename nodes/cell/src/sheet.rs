@@ -47,7 +47,7 @@ pub struct SheetArgs {
     /// Skip the improvement phase.
     #[arg(long)]
     pub no_improve: bool,
-    /// Time budget of the improvement phase [s]; 0 = iterations only (deterministic).
+    /// Time budget of the improvement phase, in seconds; 0 = iterations only (deterministic).
     #[arg(long, default_value_t = 0.0)]
     pub seconds: f64,
     /// Machine profile for the program: a name under config/machines or a YAML file.

@@ -1,6 +1,6 @@
 //! One sequencing job end to end (seed 003 §A4 `Main`, notes §A6 inputs → outputs): read the
 //! layout, build the [`Problem`], construct a plan with a [`Policy`], optionally
-//! [`improve`](crate::improve::improve) it, and simulate the final plan once more on the thermal
+//! improve it ([`crate::improve::improve`]), and simulate the final plan once more on the thermal
 //! raster (seed 003 §A3), reporting raster frames. The `sequencer` node and `cell sheet` are
 //! thin adapters around [`run`].
 //!

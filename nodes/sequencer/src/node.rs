@@ -49,14 +49,14 @@ pub struct SequencerParams {
     pub pierce: String,
     /// Construction policy when a goal's is empty (seed 003 §A4).
     pub policy: String,
-    /// Improvement time budget when a goal asks for 0 [s]; 0 = iterations only.
+    /// Improvement time budget when a goal asks for 0, s; 0 = iterations only.
     pub time_budget_s: f64,
     /// Improvement LNS iterations.
     pub max_iterations: usize,
     /// Machine profile when a goal's is empty: a name under `config/machines` or a YAML path;
     /// its feed limit caps the toolpath feeds.
     pub machine_profile: String,
-    /// Cutting power in the toolpath [%].
+    /// Cutting power in the toolpath, %.
     pub power_percent: f64,
     /// Send improvement feedback every this many iterations (phase changes always).
     pub feedback_every: usize,
@@ -64,9 +64,9 @@ pub struct SequencerParams {
     pub frame_every_steps: u64,
     /// At most this many raster frames per goal.
     pub max_frames: usize,
-    /// DXF arc flattening tolerance [mm].
+    /// DXF arc flattening tolerance, mm.
     pub dxf_chord_tol_mm: f64,
-    /// DXF endpoint join tolerance [mm].
+    /// DXF endpoint join tolerance, mm.
     pub dxf_join_tol_mm: f64,
     /// Free pierce candidates (`max_candidates`, `spacing_mm`, `corner_angle_deg`,
     /// `corner_margin_mm`).
@@ -75,7 +75,7 @@ pub struct SequencerParams {
     pub thermal: ThermalParams,
     /// Cost weights (`cell_sequencer::cost`).
     pub cost: CostParams,
-    /// How long a finished goal's result waits for the client to ask for it [s].
+    /// How long a finished goal's result waits for the client to ask for it, s.
     pub result_timeout_s: f64,
 }
 
