@@ -12,6 +12,9 @@
 //!   with `--profile`, the machine program (see [`hotwire`]).
 //! - `cell emit --toolpath FILE --profile NAME --out FILE` turns a toolpath file into a machine
 //!   program on the spot (see [`emit`]).
+//! - `cell sheet --layout FILE.dxf|json --out DIR [--policy …]` sequences the cut of a nested
+//!   sheet on the spot (no DDS) and writes `plan.json`, `program.ngc` and `report.json` (see
+//!   [`sheet`]).
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
@@ -24,6 +27,7 @@ pub mod bag_rerun;
 pub mod emit;
 pub mod hotwire;
 pub mod rrd;
+pub mod sheet;
 pub mod stream;
 
 use std::{path::PathBuf, process::ExitCode};
@@ -44,6 +48,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("cell_probe", cell_probe::main),
     ("monitor", cell_monitor::main),
     ("planner", cell_planner::node::main),
+    ("sequencer", cell_sequencer::node::main),
     ("emitter", cell_emitter::node::main),
     ("machine_bridge", cell_bridge::node::main),
     ("job_runner", cell_runner::main),
@@ -103,6 +108,11 @@ enum Command {
     /// DDS. Exit status: 64 bad arguments or profile, 65 a toolpath the emitter refuses (no
     /// file is written), 1 the output cannot be written.
     Emit(emit::EmitArgs),
+    /// Sequence the cut of a nested sheet (DXF or JSON layout) without DDS: write
+    /// DIR/plan.json, DIR/program.ngc and DIR/report.json. Exit status: 64 bad arguments or
+    /// profile, 65 a bad layout (named file and entity or field), 1 the output cannot be
+    /// written.
+    Sheet(sheet::SheetArgs),
     /// Run a program file on one controller (GRBL or ABB RWS) without DDS, with a progress bar;
     /// Ctrl-C aborts with a safe stop. `--controller grbl-sim` starts the in-repo simulator.
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
@@ -167,6 +177,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         }
         Command::Hotwire(args) => hotwire::run(*args),
         Command::Emit(args) => emit::run(args),
+        Command::Sheet(args) => sheet::run(args),
         Command::Stream(args) => stream::run(args),
         Command::Bag(command) => bag::run(command),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),

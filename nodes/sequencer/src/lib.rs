@@ -18,9 +18,15 @@
 //! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
 //!   (seed 003 §A4).
 //! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//! - [`job`]: one job end to end (layout → plan → final simulation with raster frames), what
+//!   the `sequencer` node and `cell sheet` run.
+//! - [`toolpath`]: a plan as the `cell_msgs` `Toolpath` (travel and cut segments) and
+//!   `CutPlan` messages (notes §A6 outputs).
 //! - [`fixtures`]: hand-built grid instances for tests and the bench.
 //!
-//! Everything here is synchronous and free of ROS/DDS.
+//! - [`node`]: the `sequencer` node (the `sequence_sheet` action), a thin adapter over [`job`].
+//!
+//! Everything but [`node`] is synchronous and free of ROS/DDS.
 
 #![warn(missing_docs)]
 
@@ -33,8 +39,11 @@ pub mod problem;
 
 pub mod cost;
 pub mod improve;
+pub mod job;
+pub mod node;
 pub mod plan;
 pub mod policy;
 pub mod thermal;
+pub mod toolpath;
 
 pub mod fixtures;

@@ -1,0 +1,540 @@
+//! The `sequencer` node: serves the `sequence_sheet` action (`cell_msgs/action/SequenceSheet`),
+//! a thin adapter around [`crate::job::run`] (seed 003; issue 7).
+//!
+//! Per goal: accept it, build a [`SheetJob`] from the goal and the parameters (empty or zero
+//! goal fields take the parameters' values), run it on a blocking thread, and send feedback
+//! (phase, iteration, best cost so far) at every phase change and every `feedback_every`
+//! improvement iterations. While the final plan is simulated, the temperature raster goes out
+//! as `HeatMap` frames on `sheet_heat` (Stream QoS, so the iceoryx2 fast path on one host) every
+//! `frame_every_steps` spread steps, at most `max_frames` per goal. Then the `Toolpath` is
+//! published on `toolpath` (Plan QoS), the `CutPlan` on `cut_plan` (Plan QoS), everything is
+//! logged to Rerun and the result carries both. A goal that fails (a bad layout, an unknown
+//! policy, a bad parameter) ends as aborted with `success = false` and a message naming the file,
+//! entity or field; the node keeps serving. Goals run one at a time, in arrival order; the
+//! improvement phase is bounded by its time budget, so cancel requests are answered but not
+//! accepted.
+//!
+//! Rerun entities (the suite's `/sheet/…` tree): `/sheet/heat` (the raster over the `sim_step`
+//! timeline),
+//! `/sheet/toolpath` (the toolpath as line strips coloured by segment kind: cut vs travel),
+//! `/sheet/overheats` (points at the pierce points of the cuts that overheated, radius by count),
+//! `/sheet/best_cost` (the feedback's best cost over the `iteration` timeline) and `/sheet/log`.
+
+use std::{path::PathBuf, sync::Arc, time::Duration};
+
+use cell_msgs::{
+    geometry_msgs::Point, std_msgs::Header, CutPlan as CutPlanMsg, HeatMap, SequenceSheetFeedback,
+    SequenceSheetGoal, SequenceSheetResult, Toolpath,
+};
+use cell_profiles::MachineProfile;
+use cell_runtime::{action::GoalEndStatus, CellNode, QosPreset};
+use serde::{Deserialize, Serialize};
+
+use crate::cost::CostParams;
+use crate::dxf::DxfOptions;
+use crate::improve::ImproveParams;
+use crate::job::{self, JobProgress, LayoutSource, Phase, PierceMode, SheetJob, SheetOutcome};
+use crate::layout::PierceOptions;
+use crate::thermal::{Frame, ThermalParams};
+use crate::toolpath::{to_cut_plan_msg, to_toolpath, ToolpathOptions, FRAME_ID};
+
+/// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`; nested keys as
+/// `thermal.t_max_c`). Physical units in the names; defaults in `config/sequencer.yaml`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SequencerParams {
+    /// Precedence rules when a goal's is empty: `strict` (seed 003 §2) or `relaxed`.
+    pub precedence: String,
+    /// Pierce mode when a goal's is empty: `fixed` or `free` ([`crate::job`] docs).
+    pub pierce: String,
+    /// Construction policy when a goal's is empty (seed 003 §A4).
+    pub policy: String,
+    /// Improvement time budget when a goal asks for 0, s; 0 = iterations only.
+    pub time_budget_s: f64,
+    /// Improvement LNS iterations.
+    pub max_iterations: usize,
+    /// Machine profile when a goal's is empty: a name under `config/machines` or a YAML path;
+    /// its feed limit caps the toolpath feeds.
+    pub machine_profile: String,
+    /// Cutting power in the toolpath, %.
+    pub power_percent: f64,
+    /// Send improvement feedback every this many iterations (phase changes always).
+    pub feedback_every: usize,
+    /// Publish a raster frame every this many spread steps of the final simulation.
+    pub frame_every_steps: u64,
+    /// At most this many raster frames per goal.
+    pub max_frames: usize,
+    /// DXF arc flattening tolerance, mm.
+    pub dxf_chord_tol_mm: f64,
+    /// DXF endpoint join tolerance, mm.
+    pub dxf_join_tol_mm: f64,
+    /// Free pierce candidates (`max_candidates`, `spacing_mm`, `corner_angle_deg`,
+    /// `corner_margin_mm`).
+    pub pierce_options: PierceOptions,
+    /// Thermal raster constants (seed 003 §A3; `cell_sequencer::thermal`).
+    pub thermal: ThermalParams,
+    /// Cost weights (`cell_sequencer::cost`).
+    pub cost: CostParams,
+    /// How long a finished goal's result waits for the client to ask for it, s.
+    pub result_timeout_s: f64,
+}
+
+impl Default for SequencerParams {
+    fn default() -> Self {
+        let dxf = DxfOptions::default();
+        SequencerParams {
+            precedence: "strict".into(),
+            pierce: "free".into(),
+            policy: "path_overheat".into(),
+            time_budget_s: 5.0,
+            max_iterations: ImproveParams::default().max_iterations,
+            machine_profile: "linuxcnc-plasma".into(),
+            power_percent: 100.0,
+            feedback_every: 10,
+            frame_every_steps: 200,
+            max_frames: 200,
+            dxf_chord_tol_mm: dxf.chord_tol_mm,
+            dxf_join_tol_mm: dxf.join_tol_mm,
+            pierce_options: PierceOptions::default(),
+            thermal: ThermalParams::default(),
+            cost: CostParams::default(),
+            result_timeout_s: 600.0,
+        }
+    }
+}
+
+/// The job a goal asks for and the toolpath options, or why it cannot run (one line naming
+/// the field).
+///
+/// # Errors
+/// An unknown precedence, pierce mode or policy, a negative time budget, a machine profile
+/// that does not resolve, or no layout at all.
+pub fn goal_to_job(
+    goal: &SequenceSheetGoal,
+    p: &SequencerParams,
+) -> Result<(SheetJob, ToolpathOptions), String> {
+    let or = |g: &str, d: &str| {
+        if g.is_empty() {
+            d.to_string()
+        } else {
+            g.to_string()
+        }
+    };
+    let precedence = job::parse_precedence(&or(&goal.precedence, &p.precedence))?;
+    let pierce = PierceMode::parse(&or(&goal.pierce, &p.pierce))?;
+    let policy = job::parse_policy(&or(&goal.policy, &p.policy))?;
+    let budget_s = if goal.time_budget_s == 0.0 {
+        p.time_budget_s
+    } else {
+        goal.time_budget_s
+    };
+    if !(budget_s.is_finite() && budget_s >= 0.0) {
+        return Err(format!("time_budget_s {budget_s}: must be finite and ≥ 0"));
+    }
+    let layout = match (goal.layout_file.is_empty(), goal.layout_json.is_empty()) {
+        (false, _) => LayoutSource::File(PathBuf::from(&goal.layout_file)),
+        (true, false) => LayoutSource::Json(goal.layout_json.clone()),
+        (true, true) => return Err("layout_file and layout_json are both empty".into()),
+    };
+    let machine = MachineProfile::resolve(&or(&goal.machine_profile, &p.machine_profile))
+        .map_err(|e| format!("machine_profile: {e}"))?;
+    let job = SheetJob {
+        layout,
+        dxf: DxfOptions {
+            chord_tol_mm: p.dxf_chord_tol_mm,
+            join_tol_mm: p.dxf_join_tol_mm,
+            ..DxfOptions::default()
+        },
+        precedence,
+        pierce,
+        pierce_options: p.pierce_options,
+        policy,
+        improve: goal.improve,
+        improve_params: ImproveParams {
+            max_iterations: p.max_iterations,
+            time_budget_ms: (budget_s * 1000.0).round() as u64,
+            ..ImproveParams::default()
+        },
+        thermal: p.thermal.clone(),
+        cost: p.cost.clone(),
+        seed: goal.seed,
+    };
+    let opt = ToolpathOptions {
+        cut_mm_s: p.thermal.cut_speed_mm_s.min(machine.max_feed_mm_s),
+        rapid_mm_s: p.thermal.rapid_speed_mm_s.min(machine.max_feed_mm_s),
+        power_percent: p.power_percent,
+    };
+    Ok((job, opt))
+}
+
+/// A raster frame as a `HeatMap` (seed 003 §A3): absolute temperature in °C, threshold
+/// `t_max_c`, cell (0, 0) centred half a cell in from the sheet origin.
+pub fn frame_to_heat_map(frame: &Frame, t_max_c: f32) -> HeatMap {
+    let half = frame.cell_mm / 2.0;
+    HeatMap {
+        header: Header {
+            stamp: cell_msgs::builtin_interfaces::Time::now(),
+            frame_id: FRAME_ID.into(),
+        },
+        quantity: "sheet_temperature".into(),
+        unit: "degC".into(),
+        width: frame.width as u32,
+        height: frame.height as u32,
+        cell_width_mm: frame.cell_mm,
+        cell_height_mm: frame.cell_mm,
+        origin: Point {
+            x: half,
+            y: half,
+            z: 0.0,
+        },
+        threshold: t_max_c,
+        data: frame
+            .excess_c
+            .iter()
+            .map(|&e| e + frame.ambient_c)
+            .collect(),
+    }
+}
+
+/// What the job thread reports to the node.
+enum Update {
+    Progress(JobProgress),
+    Frame(u64, Box<HeatMap>),
+}
+
+fn log_result(
+    node: &CellNode,
+    out: &SheetOutcome,
+    toolpath: &Toolpath,
+    plan: &CutPlanMsg,
+    message: &str,
+) {
+    let sink = node.rerun();
+    sink.set_time(&toolpath.header.stamp, 0);
+    sink.log_toolpath("/sheet/toolpath", toolpath);
+    if let Some(rec) = sink.stream() {
+        let (points, radii): (Vec<[f32; 3]>, Vec<f32>) = out
+            .plan
+            .cuts
+            .iter()
+            .zip(&out.per_cut)
+            .filter(|(_, t)| t.pierce_overheats + t.segment_overheats > 0)
+            .map(|(c, t)| {
+                let p = c.point(&out.problem);
+                let n = (t.pierce_overheats + t.segment_overheats) as f32;
+                ([p[0] as f32, p[1] as f32, 0.0], 2.0 + n)
+            })
+            .unzip();
+        if let Err(e) = rec.log(
+            "/sheet/overheats",
+            &rerun::Points3D::new(points)
+                .with_radii(radii)
+                .with_colors([rerun::Color::from_rgb(255, 40, 40)]),
+        ) {
+            tracing::warn!("rerun: {e}");
+        }
+    }
+    sink.log_text(
+        "/sheet/log",
+        &format!(
+            "{message} (max {:.0} °C above ambient)",
+            plan.max_temperature_c
+        ),
+    );
+}
+
+/// Serves `sequence_sheet` until shutdown.
+pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
+    let server = Arc::new(
+        node.action_server::<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>(
+            "sequence_sheet",
+        )?,
+    );
+    let toolpaths = node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?;
+    let plans = node.publisher::<CutPlanMsg>("cut_plan", QosPreset::Plan)?;
+    let heat = node.publisher::<HeatMap>("sheet_heat", QosPreset::Stream)?;
+    tracing::info!(
+        "serving {} (policy {}, {} precedence, {} pierce, {} s improvement by default)",
+        node.resolve_topic("sequence_sheet"),
+        p.policy,
+        p.precedence,
+        p.pierce,
+        p.time_budget_s
+    );
+    let mut served = 0u64;
+    loop {
+        let handle = tokio::select! {
+            h = server.receive_new_goal() => match h {
+                Ok(h) => h,
+                Err(e) => {
+                    tracing::warn!("sequence_sheet: cannot read a goal: {e:?}");
+                    continue;
+                }
+            },
+            c = server.receive_cancel_request() => {
+                if let Ok(c) = c {
+                    if let Err(e) = server.respond_to_cancel_requests(&c, std::iter::empty()).await {
+                        tracing::warn!("sequence_sheet: cancel response: {e:?}");
+                    }
+                }
+                continue;
+            }
+            _ = node.shutdown().requested() => return Ok(()),
+        };
+        let Some(goal) = server.get_new_goal(handle.clone()) else {
+            tracing::warn!("sequence_sheet: goal without a body");
+            continue;
+        };
+        served += 1;
+        let job_id = if goal.job_id.is_empty() {
+            format!("sheet-{served}")
+        } else {
+            goal.job_id.clone()
+        };
+        let accepted = match server.accept_goal(handle).await {
+            Ok(a) => a,
+            Err(e) => {
+                tracing::warn!("sequence_sheet: accept {job_id}: {e:?}");
+                continue;
+            }
+        };
+        let executing = match server.start_executing_goal(accepted).await {
+            Ok(x) => x,
+            Err(e) => {
+                tracing::warn!("sequence_sheet: execute {job_id}: {e:?}");
+                continue;
+            }
+        };
+        let (status, result) = match goal_to_job(&goal, &p) {
+            Err(e) => failed(&job_id, e),
+            Ok((sheet_job, opt)) => {
+                tracing::info!("sequence_sheet: sequencing {job_id} (seed {})", goal.seed);
+                let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
+                let (every, frame_every, max_frames, t_max) = (
+                    p.feedback_every.max(1),
+                    p.frame_every_steps.max(1),
+                    p.max_frames,
+                    p.thermal.t_max_c,
+                );
+                let task = {
+                    let sheet_job = sheet_job.clone();
+                    tokio::task::spawn_blocking(move || {
+                        let mut frames = 0usize;
+                        let ftx = tx.clone();
+                        let mut on_frame = |f: &Frame| {
+                            if frames < max_frames {
+                                frames += 1;
+                                let hm = frame_to_heat_map(f, t_max);
+                                let _ = ftx.send(Update::Frame(f.step, Box::new(hm)));
+                            }
+                        };
+                        let mut last = None;
+                        job::run(
+                            &sheet_job,
+                            |pr| {
+                                let changed = last != Some(pr.phase);
+                                last = Some(pr.phase);
+                                if changed
+                                    || pr.phase != Phase::Improvement
+                                    || pr.iteration % every == 0
+                                {
+                                    let _ = tx.send(Update::Progress(pr));
+                                }
+                            },
+                            frame_every,
+                            &mut on_frame,
+                        )
+                    })
+                };
+                while let Some(update) = rx.recv().await {
+                    match update {
+                        Update::Progress(pr) => {
+                            if let Some(rec) = node.rerun().stream() {
+                                if pr.phase == Phase::Improvement {
+                                    rec.set_time_sequence("iteration", pr.iteration as i64);
+                                    if let Err(e) = rec.log(
+                                        "/sheet/best_cost",
+                                        &rerun::Scalars::single(pr.best_cost),
+                                    ) {
+                                        tracing::warn!("rerun: {e}");
+                                    }
+                                    rec.disable_timeline("iteration");
+                                }
+                            }
+                            let feedback = SequenceSheetFeedback {
+                                phase: pr.phase.name().into(),
+                                iteration: pr.iteration as u32,
+                                best_cost: pr.best_cost,
+                                best_idle_length_mm: pr.best_idle_mm,
+                                best_overheats: pr.best_overheats as u32,
+                            };
+                            if let Err(e) =
+                                server.publish_feedback(executing.clone(), feedback).await
+                            {
+                                tracing::warn!("sequence_sheet: feedback {job_id}: {e:?}");
+                            }
+                        }
+                        Update::Frame(step, hm) => {
+                            if let Some(rec) = node.rerun().stream() {
+                                rec.set_time_sequence("sim_step", step as i64);
+                                node.rerun().log_heat_map("/sheet/heat", &hm);
+                                rec.disable_timeline("sim_step");
+                            }
+                            heat.publish(*hm).await?;
+                        }
+                    }
+                }
+                let outcome = task
+                    .await
+                    .map_err(|e| anyhow::anyhow!("sequencing thread: {e}"))?;
+                match outcome {
+                    Err(e) => failed(&job_id, e.to_string()),
+                    Ok(out) => {
+                        let toolpath = to_toolpath(&out.problem, &out.plan, &job_id, &opt);
+                        let plan = to_cut_plan_msg(
+                            &out.problem,
+                            &out.plan,
+                            &job_id,
+                            job::policy_name(sheet_job.policy),
+                            out.improved,
+                            sheet_job.thermal.ambient_c,
+                        );
+                        toolpaths.publish(toolpath.clone()).await?;
+                        plans.publish(plan.clone()).await?;
+                        let message = format!(
+                            "sequenced {job_id}: {} contours, {}{}, idle {:.1} mm, cut {:.1} mm, \
+                             {} overheats, cost {:.1} ({:.1} s)",
+                            out.problem.contours.len(),
+                            plan.policy,
+                            if out.improved { " + improvement" } else { "" },
+                            plan.idle_length_mm,
+                            plan.cut_length_mm,
+                            plan.overheats,
+                            plan.cost,
+                            out.seconds
+                        );
+                        log_result(&node, &out, &toolpath, &plan, &message);
+                        tracing::info!("sequence_sheet: {message}");
+                        (
+                            GoalEndStatus::Succeeded,
+                            SequenceSheetResult {
+                                success: true,
+                                message,
+                                plan,
+                                toolpath,
+                            },
+                        )
+                    }
+                }
+            }
+        };
+        let (server, wait) = (
+            server.clone(),
+            Duration::from_secs_f64(p.result_timeout_s.max(0.0)),
+        );
+        tokio::spawn(async move {
+            match tokio::time::timeout(wait, server.send_result_response(executing, status, result))
+                .await
+            {
+                Ok(Ok(())) => {}
+                Ok(Err(e)) => tracing::warn!("sequence_sheet: result: {e:?}"),
+                Err(_) => tracing::warn!("sequence_sheet: nobody asked for a result"),
+            }
+        });
+    }
+}
+
+fn failed(job_id: &str, e: String) -> (GoalEndStatus, SequenceSheetResult) {
+    let message = format!("{job_id}: {e}");
+    tracing::warn!("sequence_sheet: failed: {message}");
+    (
+        GoalEndStatus::Aborted,
+        SequenceSheetResult {
+            success: false,
+            message,
+            ..Default::default()
+        },
+    )
+}
+
+/// The `sequencer` binary (also `cell node sequencer`).
+pub fn main(argv: Vec<String>) -> std::process::ExitCode {
+    cell_runtime::run_node("sequencer", argv, run)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_params_file_parses_and_matches_the_defaults() {
+        let mut sources = cell_runtime::params::ParamSources::default();
+        let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/sequencer.yaml");
+        sources
+            .merge_file(std::path::Path::new(file), "/", "sequencer")
+            .unwrap();
+        let p: SequencerParams = sources.parse().unwrap();
+        assert_eq!(p, SequencerParams::default());
+    }
+
+    #[test]
+    fn goals_map_to_jobs_and_bad_ones_are_named() {
+        let p = SequencerParams::default();
+        let goal = SequenceSheetGoal {
+            layout_json: "{}".into(),
+            ..Default::default()
+        };
+        let (job, opt) = goal_to_job(&goal, &p).unwrap();
+        assert_eq!(job.policy, crate::policy::Policy::PathOverheat);
+        assert!(!job.improve);
+        assert_eq!(job.improve_params.time_budget_ms, 5000);
+        assert_eq!(opt.cut_mm_s, p.thermal.cut_speed_mm_s);
+        // linuxcnc-plasma's feed limit (150 mm/s) caps the rapid.
+        assert_eq!(opt.rapid_mm_s, 150.0);
+        let bad = |g: SequenceSheetGoal, word: &str| {
+            let e = goal_to_job(&g, &p).unwrap_err();
+            assert!(e.contains(word), "{e}");
+        };
+        bad(
+            SequenceSheetGoal {
+                policy: "fastest".into(),
+                ..goal.clone()
+            },
+            "fastest",
+        );
+        bad(
+            SequenceSheetGoal {
+                precedence: "loose".into(),
+                ..goal.clone()
+            },
+            "loose",
+        );
+        bad(
+            SequenceSheetGoal {
+                machine_profile: "mill_9000".into(),
+                ..goal.clone()
+            },
+            "mill_9000",
+        );
+        bad(SequenceSheetGoal::default(), "layout_file");
+    }
+
+    #[test]
+    fn frames_become_heat_maps_in_absolute_degrees() {
+        let data = [0.0f32, 10.0, 280.0, 0.0, 0.0, 0.0];
+        let f = Frame {
+            step: 3,
+            time_s: 0.3,
+            width: 3,
+            height: 2,
+            cell_mm: 4.0,
+            ambient_c: 20.0,
+            excess_c: &data,
+        };
+        let hm = frame_to_heat_map(&f, 300.0);
+        assert_eq!((hm.width, hm.height), (3, 2));
+        assert_eq!(hm.data[2], 300.0);
+        assert_eq!(hm.origin.x, 2.0);
+        assert_eq!(hm.threshold, 300.0);
+    }
+}

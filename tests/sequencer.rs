@@ -1,0 +1,282 @@
+//! The sheet sequencer end to end (seed 003; issue 7): the `sequencer` node serving
+//! `sequence_sheet` in process (goal, feedback, result, the Toolpath and CutPlan topics, heat
+//! map frames on `sheet_heat`, a bad layout answered with `success = false`), and the one-shot
+//! `cell sheet` command (files written, the program accepted by LinuxCNC's interpreter, errors
+//! naming the file and entity).
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use cell_msgs::{
+    CutPlan, HeatMap, SequenceSheetFeedback, SequenceSheetGoal, SequenceSheetResult, Toolpath,
+    ToolpathSegment,
+};
+use cell_runtime::{action::GoalStatusEnum, QosPreset};
+use cell_sequencer::{
+    job::{load_problem, LayoutSource, SheetJob},
+    node::{run, SequencerParams},
+    problem::Problem,
+};
+use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/sheet")
+        .join(name)
+}
+
+fn problem_of(file: &Path) -> Problem {
+    load_problem(&SheetJob {
+        layout: LayoutSource::File(file.to_path_buf()),
+        ..Default::default()
+    })
+    .unwrap()
+}
+
+/// Every contour cut exactly once, in an order the precedence rules allow.
+fn assert_valid_order(problem: &Problem, order: &[u32]) {
+    let order: Vec<usize> = order.iter().map(|&c| c as usize).collect();
+    problem.precedence.check_order(&order).unwrap();
+    let mut sorted = order.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, (0..problem.contours.len()).collect::<Vec<_>>());
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
+    let domain = fresh_domain();
+    let server_node = node("sequencer", domain, false);
+    let client_node = node("operator", domain, false);
+    let params = SequencerParams {
+        max_iterations: 30,
+        feedback_every: 1,
+        frame_every_steps: 50,
+        max_frames: 20,
+        ..SequencerParams::default()
+    };
+    let sequencer = tokio::spawn(run(server_node, params));
+
+    let mut toolpaths = client_node
+        .subscriber::<Toolpath>("/toolpath", QosPreset::Plan)
+        .unwrap();
+    let mut plans = client_node
+        .subscriber::<CutPlan>("/cut_plan", QosPreset::Plan)
+        .unwrap();
+    let mut heat = client_node
+        .subscriber::<HeatMap>("/sheet_heat", QosPreset::Stream)
+        .unwrap();
+    let client = client_node
+        .action_client::<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>(
+            "/sequence_sheet",
+        )
+        .unwrap();
+    assert!(
+        client_node
+            .wait_for_action_server("/sequence_sheet", DELIVERY_TIMEOUT)
+            .await,
+        "sequencer never discovered"
+    );
+
+    // A broken DXF first: a result with success = false naming the file and the entities.
+    let broken = data("broken_open_chain.dxf");
+    let FollowedGoal { status, result, .. } = follow_goal(
+        &client,
+        SequenceSheetGoal {
+            job_id: "broken".into(),
+            layout_file: broken.display().to_string(),
+            ..Default::default()
+        },
+    )
+    .await
+    .expect("accepted");
+    assert_eq!(status, GoalStatusEnum::Aborted, "{}", result.message);
+    assert!(!result.success);
+    assert!(
+        result.message.contains("broken_open_chain.dxf")
+            && result.message.contains("open contour")
+            && result.message.contains("LINE"),
+        "{}",
+        result.message
+    );
+
+    // Then a good goal: the real plate nest, with improvement.
+    let file = data("plate_holes_nest.json");
+    let FollowedGoal {
+        first_feedback,
+        status,
+        result,
+    } = follow_goal(
+        &client,
+        SequenceSheetGoal {
+            job_id: "nest-1".into(),
+            layout_file: file.display().to_string(),
+            improve: true,
+            time_budget_s: 20.0,
+            seed: 4,
+            ..Default::default()
+        },
+    )
+    .await
+    .expect("accepted");
+    assert!(
+        ["load", "construction", "improvement", "simulation"]
+            .contains(&first_feedback.phase.as_str()),
+        "{first_feedback:?}"
+    );
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert!(result.success, "{}", result.message);
+    let problem = problem_of(&file);
+    let plan = &result.plan;
+    assert_valid_order(&problem, &plan.order);
+    assert_eq!(plan.job_id, "nest-1");
+    assert!(plan.improved);
+    assert_eq!(plan.policy, "path_overheat");
+    assert!(plan.idle_length_mm > 0.0 && plan.cut_length_mm > 0.0);
+
+    let tp = &result.toolpath;
+    assert_eq!(tp.process, Toolpath::PROCESS_SHEET_CUT);
+    let cuts: Vec<&ToolpathSegment> = tp
+        .segments
+        .iter()
+        .filter(|s| s.kind == ToolpathSegment::KIND_CUT)
+        .collect();
+    assert_eq!(cuts.len(), problem.contours.len());
+    for (seg, pierce) in cuts.iter().zip(&plan.pierce_points) {
+        assert_eq!(seg.points.first(), Some(pierce));
+        assert_eq!(seg.points.last(), Some(pierce));
+    }
+    let travel = cell_sequencer::toolpath::travel_length_mm(tp);
+    assert!((travel - plan.idle_length_mm).abs() < 1e-6);
+
+    let published = within(toolpaths.recv()).await.expect("toolpath topic");
+    assert_eq!(published.message.job_id, "nest-1");
+    assert_eq!(published.message.segments, tp.segments);
+    let published = within(plans.recv()).await.expect("cut_plan topic");
+    assert_eq!(published.message.order, plan.order);
+    let frame = within(heat.recv()).await.expect("sheet_heat topic");
+    assert_eq!(frame.message.quantity, "sheet_temperature");
+    assert!(frame.message.width > 1 && frame.message.height > 1);
+    assert_eq!(
+        frame.message.data.len(),
+        (frame.message.width * frame.message.height) as usize
+    );
+
+    // Still serving after the broken goal and the good one.
+    let FollowedGoal { status, result, .. } = follow_goal(
+        &client,
+        SequenceSheetGoal {
+            job_id: "small".into(),
+            layout_file: data("small.dxf").display().to_string(),
+            policy: "nearest".into(),
+            ..Default::default()
+        },
+    )
+    .await
+    .expect("accepted");
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert_valid_order(&problem_of(&data("small.dxf")), &result.plan.order);
+    assert!(!sequencer.is_finished(), "the sequencer node must stay up");
+    sequencer.abort();
+}
+
+const CELL: &str = env!("CARGO_BIN_EXE_cell");
+
+#[test]
+fn cell_sheet_writes_plan_program_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let layout = data("small.dxf");
+    let run = std::process::Command::new(CELL)
+        .args(["sheet", "--seed", "2", "--layout"])
+        .arg(&layout)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+
+    let plan: CutPlan =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
+    assert_valid_order(&problem_of(&layout), &plan.order);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["idle_length_mm"].as_f64(), Some(plan.idle_length_mm));
+    assert_eq!(report["cut_length_mm"].as_f64(), Some(plan.cut_length_mm));
+    assert_eq!(
+        report["overheats"].as_u64(),
+        Some(u64::from(plan.overheats))
+    );
+    assert_eq!(
+        report["max_temperature_c"].as_f64(),
+        Some(plan.max_temperature_c)
+    );
+    assert_eq!(report["policy"], "path_overheat");
+    assert_eq!(report["improved"], true);
+    let phases: Vec<&str> = report["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["phase"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        phases,
+        ["load", "construction", "improvement", "simulation"]
+    );
+
+    // The program passes LinuxCNC's interpreter, one pierce (M3) per contour.
+    let ngc = out.join("program.ngc");
+    let text = std::fs::read_to_string(&ngc).unwrap();
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("M3")).count(),
+        plan.order.len(),
+        "{text}"
+    );
+    let canon = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/interp/canon.py");
+    let check = std::process::Command::new("python3")
+        .arg(canon)
+        .arg(&ngc)
+        .arg("XYZ")
+        .output()
+        .expect("python3 runs");
+    let code = check.status.code().unwrap_or(-1);
+    assert_ne!(
+        code,
+        3,
+        "LinuxCNC's interpreter is missing: run `bash tests/interp/install.sh` ({})",
+        String::from_utf8_lossy(&check.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&check.stdout).unwrap();
+    assert_eq!(code, 0, "{}", json["error"]);
+}
+
+#[test]
+fn cell_sheet_names_a_broken_layout_and_bad_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = std::process::Command::new(CELL)
+        .args(["sheet", "--layout"])
+        .arg(data("broken_open_chain.dxf"))
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(65), "{stderr}");
+    assert!(
+        stderr.contains("broken_open_chain.dxf") && stderr.contains("LINE"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("plan.json").exists());
+
+    let run = std::process::Command::new(CELL)
+        .args(["sheet", "--policy", "fastest", "--layout"])
+        .arg(data("small.dxf"))
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(64), "{stderr}");
+    assert!(stderr.contains("fastest"), "{stderr}");
+}
