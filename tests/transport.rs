@@ -99,12 +99,14 @@ async fn shared_memory_and_dds_readers_each_get_every_frame_once() {
         .publisher::<HeatMap>("heat_map", QosPreset::Stream)
         .unwrap();
     assert!(publisher.wait_for_subscribers(2, DELIVERY_TIMEOUT).await);
-    // Wait until DDS has matched both readers, so every frame goes both ways.
+    // Wait until DDS has matched both readers and the local one is attached to shared memory,
+    // so every frame goes both ways. (DDS discovery alone can finish first; a frame sent then
+    // goes over DDS only, which is correct delivery but not what this test measures.)
     let deadline = tokio::time::Instant::now() + DELIVERY_TIMEOUT;
-    while publisher.dds_subscription_count() < 2 {
+    while publisher.dds_subscription_count() < 2 || publisher.shared_memory_subscriber_count() < 1 {
         assert!(
             tokio::time::Instant::now() < deadline,
-            "DDS readers never matched"
+            "DDS readers never matched or the local reader never attached to shared memory"
         );
         tokio::time::sleep(Duration::from_millis(50)).await;
     }

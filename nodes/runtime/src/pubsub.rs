@@ -115,6 +115,13 @@ impl<T: RosMessage> Publisher<T> {
             .with_ros_node(|n| n.subscription_count(&self.topic))
     }
 
+    /// Subscribers on this host reading the shared-memory fast path (0 without a fast path).
+    pub fn shared_memory_subscriber_count(&self) -> usize {
+        self.fast
+            .as_ref()
+            .map_or(0, FastPublisher::subscriber_count)
+    }
+
     /// Waits until at least `count` subscribers (DDS or shared memory) are matched, or `timeout`.
     /// Returns whether they were.
     pub async fn wait_for_subscribers(&self, count: usize, timeout: Duration) -> bool {
