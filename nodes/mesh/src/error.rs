@@ -75,7 +75,7 @@ pub enum MeshError {
     },
 }
 
-/// Why [`crate::slice`] refused its parameters.
+/// Why [`crate::slice()`] refused its parameters.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum SliceError {
     /// Layer height not finite or not > 0.
@@ -90,7 +90,9 @@ pub enum SliceError {
         value: f64,
     },
     /// The layer count would exceed [`crate::MAX_LAYERS`].
-    #[error("{layers} layers of {layer_height_mm} mm over {height_mm} mm exceed the limit of {max}")]
+    #[error(
+        "{layers} layers of {layer_height_mm} mm over {height_mm} mm exceed the limit of {max}"
+    )]
     TooManyLayers {
         /// Requested layer count.
         layers: f64,

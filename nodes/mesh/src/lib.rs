@@ -5,7 +5,7 @@
 //!    ([`WeldTolerance`], default 1e-6 × bounding-box diagonal), an edge table, and a
 //!    [`MeshReport`] of holes, non-manifold edges, flipped windings and degenerate triangles.
 //!    Bad files give a [`MeshError`] naming the file (and triangle); nothing panics.
-//! 2. [`slice`] — planes at `z_k = first_z + k·h` (default `first_z = z_min + h/2`, mid-layer),
+//! 2. [`slice()`] — planes at `z_k = first_z + k·h` (default `first_z = z_min + h/2`, mid-layer),
 //!    a sweep over triangles sorted by lowest z with an active set, so each triangle is touched
 //!    only for the layers it spans; the triangle–plane intersection of seed 004 eqs. 8–11 with a
 //!    half-open rule (a corner with `z == plane` counts as above) so planes through vertices or

@@ -83,7 +83,7 @@ impl MeshReport {
     }
 }
 
-/// A welded, indexed triangle mesh with an edge table, ready for [`crate::slice`].
+/// A welded, indexed triangle mesh with an edge table, ready for [`crate::slice()`].
 ///
 /// Coordinates are mm (STL has no unit; the file's numbers are taken as mm).
 #[derive(Debug, Clone)]
@@ -279,9 +279,8 @@ fn parse_stl(file: &Path, bytes: &[u8]) -> Result<(RawTriangles, StlFormat, usiz
             message: e.to_string(),
         })?;
         let mut corners = [[0.0f64; 3]; 3];
-        for (v, vert) in tri.vertices.iter().enumerate() {
-            for k in 0..3 {
-                let c = vert.0[k];
+        for (v, (vert, out)) in tri.vertices.iter().zip(corners.iter_mut()).enumerate() {
+            for (&c, o) in vert.0.iter().zip(out.iter_mut()) {
                 if !c.is_finite() {
                     return Err(MeshError::NonFinite {
                         file: file.to_path_buf(),
@@ -290,7 +289,7 @@ fn parse_stl(file: &Path, bytes: &[u8]) -> Result<(RawTriangles, StlFormat, usiz
                         value: c,
                     });
                 }
-                corners[v][k] = c as f64;
+                *o = c as f64;
             }
         }
         out.push(corners);

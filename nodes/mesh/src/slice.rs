@@ -9,7 +9,10 @@ use crate::error::SliceError;
 use crate::mesh::Mesh;
 use crate::polygon::{bounds, point_in_polygon, signed_area_mm2};
 
-/// Upper bound on the number of layers one [`slice`] call produces (guards against absurd
+/// A point sequence (x, y), mm.
+type Ring = Vec<[f64; 2]>;
+
+/// Upper bound on the number of layers one [`slice()`] call produces (guards against absurd
 /// layer heights or corrupt coordinates).
 pub const MAX_LAYERS: usize = 1_000_000;
 
@@ -117,7 +120,7 @@ impl LayerStack {
     }
 }
 
-/// What [`slice`] returns.
+/// What [`slice()`] returns.
 pub type LayerStackResult = Result<LayerStack, SliceError>;
 
 /// Slices `mesh` with horizontal planes `z_k = first_z + k·h`, `k = 0, 1, …` while `z_k < z_max`.
@@ -153,7 +156,7 @@ pub fn slice(mesh: &Mesh, params: &SliceParams) -> LayerStackResult {
         });
     }
     let span = (hi[2] - first) / h;
-    if !(span < MAX_LAYERS as f64) {
+    if span.is_nan() || span >= MAX_LAYERS as f64 {
         return Err(SliceError::TooManyLayers {
             layers: span,
             layer_height_mm: h,
@@ -309,8 +312,8 @@ fn slice_layer(mesh: &Mesh, index: usize, z: f64, crossing: &[u32], tol: f64) ->
             continue;
         }
         let (a, b) = (node_start[n0 as usize], node_start[n0 as usize + 1]);
-        for k in a..b {
-            let mut s = inc[k].1;
+        for &(_, first_seg) in &inc[a..b] {
+            let mut s = first_seg;
             if visited[s as usize] {
                 continue;
             }
@@ -398,10 +401,7 @@ fn slice_layer(mesh: &Mesh, index: usize, z: f64, crossing: &[u32], tol: f64) ->
 /// edges). Greedy in input order on a uniform grid of cell `tol`: each chain grows at its tail,
 /// then at its head, taking the nearest free endpoint, and closes when its ends meet.
 /// Returns (closed rings, chains still open).
-fn join_open_chains(
-    chains: Vec<Vec<[f64; 2]>>,
-    tol: f64,
-) -> (Vec<Vec<[f64; 2]>>, Vec<Vec<[f64; 2]>>) {
+fn join_open_chains(chains: Vec<Ring>, tol: f64) -> (Vec<Ring>, Vec<Ring>) {
     if chains.is_empty() {
         return (Vec::new(), Vec::new());
     }
@@ -410,7 +410,9 @@ fn join_open_chains(
     let mut grid: HashMap<[i64; 2], Vec<(u32, bool)>> = HashMap::new(); // (chain, is_tail)
     for (i, c) in chains.iter().enumerate() {
         grid.entry(key(c[0])).or_default().push((i as u32, false));
-        grid.entry(key(c[c.len() - 1])).or_default().push((i as u32, true));
+        grid.entry(key(c[c.len() - 1]))
+            .or_default()
+            .push((i as u32, true));
     }
     let d2 = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
     let mut used = vec![false; chains.len()];

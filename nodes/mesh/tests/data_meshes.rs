@@ -204,7 +204,11 @@ fn plate_holes_is_outer_plus_five_holes_of_constant_area_band() {
     let m = load("plate_holes.STL");
     assert_eq!(m.report().boundary_edges, 0);
     let st = slice(&m, &SliceParams::new(0.5)).unwrap();
-    assert_eq!(st.layers.len(), 25, "12.7 mm plate at 0.5 mm, mid-layer planes");
+    assert_eq!(
+        st.layers.len(),
+        25,
+        "12.7 mm plate at 0.5 mm, mid-layer planes"
+    );
     for l in &st.layers {
         assert_eq!(l.contours.len(), 6, "z={}", l.z_mm);
         let holes: Vec<_> = l.contours.iter().filter(|c| c.is_hole).collect();
@@ -219,7 +223,10 @@ fn soup_slices_to_reported_open_chains_only() {
     let m = load("soup.stl");
     let r = m.report();
     assert_eq!(r.input_triangles, 100);
-    assert_eq!(r.boundary_edges, 300, "100 separate triangles: every edge is a boundary");
+    assert_eq!(
+        r.boundary_edges, 300,
+        "100 separate triangles: every edge is a boundary"
+    );
     assert_eq!(r.boundary_loops, 100);
     let (st, _) = slice_n(&m, 20);
     assert!(st.open_chain_count() > 0);
@@ -237,10 +244,16 @@ fn soup_slices_to_reported_open_chains_only() {
 fn teapot_reports_its_holes_and_still_slices() {
     let m = load("teapot.stl");
     let r = m.report();
-    assert_eq!(r.boundary_edges, 64, "trimesh also counts 64 single-use edges");
+    assert_eq!(
+        r.boundary_edges, 64,
+        "trimesh also counts 64 single-use edges"
+    );
     assert!(r.boundary_loops >= 1);
     let (st, _) = slice_n(&m, 50);
-    assert!(st.open_chain_count() > 0, "the open lid/spout rims leave open chains");
+    assert!(
+        st.open_chain_count() > 0,
+        "the open lid/spout rims leave open chains"
+    );
     assert!(st.layers.iter().all(|l| !l.contours.is_empty()));
 }
 
@@ -295,7 +308,10 @@ fn ascii_and_binary_give_the_same_slices() {
         txt.push_str("facet normal 0 0 0\nouter loop\n");
         for &i in t {
             let p = m.vertices()[i as usize];
-            txt.push_str(&format!("vertex {} {} {}\n", p[0] as f32, p[1] as f32, p[2] as f32));
+            txt.push_str(&format!(
+                "vertex {} {} {}\n",
+                p[0] as f32, p[1] as f32, p[2] as f32
+            ));
         }
         txt.push_str("endloop\nendfacet\n");
     }

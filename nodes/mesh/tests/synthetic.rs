@@ -72,7 +72,12 @@ fn cube_with_faces_on_slice_planes() {
         pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
         let len = pts.len();
         pts.dedup();
-        assert_eq!(pts.len(), len, "n={n}: doubled point in {:?}", l.contours[0].points);
+        assert_eq!(
+            pts.len(),
+            len,
+            "n={n}: doubled point in {:?}",
+            l.contours[0].points
+        );
     }
 }
 
@@ -90,7 +95,11 @@ fn planes_through_every_vertex_row_of_the_subdivided_cube() {
     for l in &st.layers[1..] {
         assert_eq!(l.contours.len(), 1);
         assert_eq!(l.net_area_mm2(), 16.0, "z={}", l.z_mm);
-        assert_eq!(l.contours[0].points.len(), 16, "4 corners + 3 grid points per side");
+        assert_eq!(
+            l.contours[0].points.len(),
+            16,
+            "4 corners + 3 grid points per side"
+        );
     }
 }
 
@@ -123,7 +132,11 @@ fn octahedron_plane_through_equator_vertices() {
     // z = -1 (apex: nothing), -0.5, 0, 0.5.
     assert_eq!(areas, vec![0.0, 0.5, 2.0, 0.5]);
     assert!(st.layers[0].contours.is_empty());
-    assert_eq!(st.layers[2].contours[0].points.len(), 4, "no doubled vertex points");
+    assert_eq!(
+        st.layers[2].contours[0].points.len(),
+        4,
+        "no doubled vertex points"
+    );
     assert_eq!(st.open_chain_count(), 0);
 }
 
@@ -196,7 +209,10 @@ fn bad_slice_params_are_errors() {
     for h in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         assert!(slice(&m, &SliceParams::new(h)).is_err(), "h={h}");
     }
-    assert!(slice(&m, &SliceParams::new(1e-9)).is_err(), "too many layers");
+    assert!(
+        slice(&m, &SliceParams::new(1e-9)).is_err(),
+        "too many layers"
+    );
     let p = SliceParams {
         first_z_mm: Some(f64::NAN),
         ..SliceParams::new(0.1)
