@@ -5,7 +5,7 @@
 //! starts with `solid `, which `stl_io`'s probe would take for ASCII), checks lengths and
 //! coordinates, welds coincident corners and records what is wrong with the surface.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
@@ -329,7 +329,7 @@ fn build(
     }
 
     // Pass 1: bit-identical corners (the common case) share an id.
-    let mut exact: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut exact: HashMap<[u64; 3], u32> = HashMap::default();
     let mut uniq: Vec<[f64; 3]> = Vec::new();
     let corner_ids: Vec<[u32; 3]> = raw
         .iter()
@@ -350,14 +350,30 @@ fn build(
     let mut remap: Vec<u32> = (0..uniq.len() as u32).collect();
     let mut vertices: Vec<[f64; 3]> = Vec::with_capacity(uniq.len());
     if tol > 0.0 {
-        let cell = |p: &[f64; 3]| p.map(|c| ((c - 0.0) / tol).floor() as i64);
-        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        // Cells of 4·tol: a neighbour cell can hold a match only when the point is within tol
+        // of the shared face, so most points probe one cell instead of 27.
+        let size = 4.0 * tol;
+        let reach = tol * (1.0 + 1e-9);
+        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::default();
         for (i, p) in uniq.iter().enumerate() {
-            let c = cell(p);
+            let c = p.map(|x| (x / size).floor() as i64);
+            let mut offs: [[i64; 3]; 3] = [[0; 3]; 3];
+            let mut nof = [1usize; 3];
+            for k in 0..3 {
+                let lo = c[k] as f64 * size;
+                if p[k] - lo <= reach {
+                    offs[k][nof[k]] = -1;
+                    nof[k] += 1;
+                }
+                if lo + size - p[k] <= reach {
+                    offs[k][nof[k]] = 1;
+                    nof[k] += 1;
+                }
+            }
             let mut found = None;
-            'search: for dx in -1i64..=1 {
-                for dy in -1i64..=1 {
-                    for dz in -1i64..=1 {
+            'search: for &dx in &offs[0][..nof[0]] {
+                for &dy in &offs[1][..nof[1]] {
+                    for &dz in &offs[2][..nof[2]] {
                         let key = [
                             c[0].saturating_add(dx),
                             c[1].saturating_add(dy),
@@ -404,7 +420,8 @@ fn build(
     }
 
     // Edge table: per undirected edge, use count and the directed uses.
-    let mut edge_ids: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 3 / 2);
+    let mut edge_ids: HashMap<(u32, u32), u32> =
+        HashMap::with_capacity_and_hasher(triangles.len() * 3 / 2, Default::default());
     let mut edges: Vec<[u32; 2]> = Vec::new();
     let mut uses: Vec<(u32, i32)> = Vec::new(); // (count, net direction: +1 lo→hi, −1 hi→lo)
     let tri_edges: Vec<[u32; 3]> = triangles

@@ -1,7 +1,7 @@
 //! Planar Z-slicing (seed 004 §B3, eqs. 8–11) with a sweep, topological chaining and
 //! orientation by nesting.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use rayon::prelude::*;
 
@@ -407,7 +407,7 @@ fn join_open_chains(chains: Vec<Ring>, tol: f64) -> (Vec<Ring>, Vec<Ring>) {
     }
     let cell = if tol > 0.0 { tol } else { f64::MIN_POSITIVE };
     let key = |p: [f64; 2]| [(p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64];
-    let mut grid: HashMap<[i64; 2], Vec<(u32, bool)>> = HashMap::new(); // (chain, is_tail)
+    let mut grid: HashMap<[i64; 2], Vec<(u32, bool)>> = HashMap::default(); // (chain, is_tail)
     for (i, c) in chains.iter().enumerate() {
         grid.entry(key(c[0])).or_default().push((i as u32, false));
         grid.entry(key(c[c.len() - 1]))

@@ -376,3 +376,65 @@ fn ascii_tetrahedron_slices() {
         assert!((l.net_area_mm2() - exact).abs() < 1e-12, "z={}", l.z_mm);
     }
 }
+
+fn shifted(tris: &[Tri], d: [f64; 3]) -> Vec<Tri> {
+    tris.iter()
+        .map(|t| t.map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]]))
+        .collect()
+}
+
+#[test]
+fn two_cubes_sharing_an_edge_are_reported_and_still_close() {
+    // Cubes [0,2]³ and [2,4]×[2,4]×[0,2] touch along the vertical edge x = y = 2: four
+    // triangles use each of its sub-edges.
+    let mut tris = grid_box(2.0, 1);
+    tris.extend(shifted(&grid_box(2.0, 1), [2.0, 2.0, 0.0]));
+    let m = mesh(&tris);
+    assert!(m.report().non_manifold_edges >= 1, "{:?}", m.report());
+    let st = slice(&m, &SliceParams::new(0.5)).unwrap();
+    for l in &st.layers {
+        assert!(l.open_chains.is_empty(), "z={}: {l:?}", l.z_mm);
+        assert!((l.net_area_mm2() - 8.0).abs() < 1e-12, "z={}", l.z_mm);
+    }
+}
+
+#[test]
+fn flipped_triangle_is_reported_and_slicing_is_unaffected() {
+    let mut tris = grid_box(2.0, 2);
+    tris[5].swap(1, 2);
+    let m = mesh(&tris);
+    assert_eq!(m.report().inconsistent_edges, 3);
+    assert!(m.report().is_closed_manifold());
+    let st = slice(&m, &SliceParams::new(0.25)).unwrap();
+    for l in &st.layers {
+        assert_eq!(l.contours.len(), 1);
+        assert_eq!(l.net_area_mm2(), 4.0);
+    }
+}
+
+#[test]
+fn collapsed_and_degenerate_triangles_are_listed() {
+    let mut tris = grid_box(2.0, 1);
+    let n = tris.len();
+    // Two corners 1e-9 apart: collapsed by the weld (tolerance 1e-6 × diag ≈ 3.5e-6).
+    tris.push([[0.0, 0.0, 0.0], [1e-9, 0.0, 0.0], [0.0, 1.0, 1.0]]);
+    // Collinear corners: kept, but degenerate.
+    tris.push([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]);
+    let m = mesh(&tris);
+    assert_eq!(m.report().collapsed_triangles, vec![n]);
+    assert_eq!(m.report().degenerate_triangles, vec![n + 1]);
+    assert_eq!(m.triangles().len(), n + 1);
+    let _ = slice(&m, &SliceParams::new(0.5)).unwrap();
+}
+
+#[test]
+fn slicing_is_deterministic() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/data/stl/featuretype.STL");
+    let m = Mesh::load_stl(path).unwrap();
+    let p = SliceParams::new(0.01);
+    let a = slice(&m, &p).unwrap();
+    for _ in 0..3 {
+        assert_eq!(slice(&m, &p).unwrap(), a);
+    }
+}
