@@ -221,9 +221,12 @@ fn parse_stl(file: &Path, bytes: &[u8]) -> Result<(RawTriangles, StlFormat, usiz
         .then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64);
     let binary_len = announced.map(|n| 84 + 50 * n);
     let exact_binary = binary_len == Some(bytes.len() as u64);
+    // Text STL has no NUL byte; binary nearly always has some (attribute bytes, small floats).
+    // This catches truncated binaries whose header starts with "solid".
+    let looks_binary = bytes[..bytes.len().min(4096)].contains(&0);
     let (format, trailing) = if exact_binary {
         (StlFormat::Binary, 0)
-    } else if starts_solid {
+    } else if starts_solid && !looks_binary {
         (StlFormat::Ascii, 0)
     } else {
         match (announced, binary_len) {

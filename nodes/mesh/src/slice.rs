@@ -405,8 +405,15 @@ fn join_open_chains(chains: Vec<Ring>, tol: f64) -> (Vec<Ring>, Vec<Ring>) {
     if chains.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    let cell = if tol > 0.0 { tol } else { f64::MIN_POSITIVE };
-    let key = |p: [f64; 2]| [(p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64];
+    // With tol = 0 only identical endpoints join: key on the bits and probe one cell.
+    let reach: i64 = if tol > 0.0 { 1 } else { 0 };
+    let key = |p: [f64; 2]| {
+        if tol > 0.0 {
+            [(p[0] / tol).floor() as i64, (p[1] / tol).floor() as i64]
+        } else {
+            [(p[0] + 0.0).to_bits() as i64, (p[1] + 0.0).to_bits() as i64]
+        }
+    };
     let mut grid: HashMap<[i64; 2], Vec<(u32, bool)>> = HashMap::default(); // (chain, is_tail)
     for (i, c) in chains.iter().enumerate() {
         grid.entry(key(c[0])).or_default().push((i as u32, false));
@@ -434,8 +441,8 @@ fn join_open_chains(chains: Vec<Ring>, tol: f64) -> (Vec<Ring>, Vec<Ring>) {
                 }
                 let k = key(tail);
                 let mut best: Option<(f64, u32, bool)> = None;
-                for dx in -1..=1i64 {
-                    for dy in -1..=1i64 {
+                for dx in -reach..=reach {
+                    for dy in -reach..=reach {
                         let kk = [k[0].saturating_add(dx), k[1].saturating_add(dy)];
                         for &(j, at_tail) in grid.get(&kk).map(|v| v.as_slice()).unwrap_or(&[]) {
                             if used[j as usize] {

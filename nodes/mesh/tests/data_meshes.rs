@@ -280,6 +280,21 @@ fn truncated_binary_fails_with_triangle_index() {
 }
 
 #[test]
+fn truncated_binary_with_solid_header_is_not_taken_for_ascii() {
+    let bytes = std::fs::read(data("angle_block.STL")).unwrap();
+    assert!(bytes.starts_with(b"solid "));
+    let cut = &bytes[..84 + 50 * 300 + 1];
+    match Mesh::from_stl_bytes("angle_cut.stl", cut, &Default::default()) {
+        Err(MeshError::Truncated {
+            triangle: 300,
+            announced: 704,
+            ..
+        }) => {}
+        other => panic!("expected Truncated at 300 of 704, got {other:?}"),
+    }
+}
+
+#[test]
 fn nan_coordinate_fails_with_triangle_index() {
     let mut bytes = std::fs::read(data("cylinder.stl")).unwrap();
     let off = 84 + 50 * 5 + 12 + 4 * 4; // triangle 5, vertex 1, y

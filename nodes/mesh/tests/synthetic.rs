@@ -244,7 +244,7 @@ fn frustum(poly: &[[f64; 2]], s: f64, d: [f64; 2], z0: f64, hgt: f64) -> Vec<Tri
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 128, ..ProptestConfig::default() })]
 
     #[test]
     fn random_convex_frustums_slice_to_one_exact_contour(
@@ -285,12 +285,16 @@ proptest! {
 
     #[test]
     fn mangled_stl_bytes_never_panic(
-        cut in 0usize..20_000,
-        flips in prop::collection::vec((0usize..20_000, any::<u8>()), 0..8),
+        cut in 0usize..40_000,
+        flips in prop::collection::vec((0usize..40_000, any::<u8>()), 0..8),
         truncate in any::<bool>(),
+        solid_header in any::<bool>(),
     ) {
+        // cylinder.stl has a zero header; angle_block.STL is binary behind a "solid " header.
+        let name = if solid_header { "angle_block.STL" } else { "cylinder.stl" };
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../tests/data/stl/cylinder.stl");
+            .join("../../tests/data/stl")
+            .join(name);
         let mut bytes = std::fs::read(path).unwrap();
         for (pos, val) in flips {
             let k = pos % bytes.len();
