@@ -194,24 +194,30 @@ pub fn slice(mesh: &Mesh, params: &SliceParams) -> LayerStackResult {
             .total_cmp(&zrange[b as usize].0)
             .then(a.cmp(&b))
     });
-    let mut per_layer: Vec<Vec<u32>> = Vec::with_capacity(zs.len());
+    // Layers go in batches: the sweep collects each batch's crossing triangles, then the batch
+    // is chained in parallel, so memory stays bounded by one batch, not the whole stack.
+    const BATCH: usize = 64;
+    let mut layers: Vec<Layer> = Vec::with_capacity(zs.len());
     let mut active: Vec<u32> = Vec::new();
     let mut next = 0;
-    for &z in &zs {
-        while next < order.len() && zrange[order[next] as usize].0 < z {
-            active.push(order[next]);
-            next += 1;
+    for (b, zb) in zs.chunks(BATCH).enumerate() {
+        let mut per_layer: Vec<Vec<u32>> = Vec::with_capacity(zb.len());
+        for &z in zb {
+            while next < order.len() && zrange[order[next] as usize].0 < z {
+                active.push(order[next]);
+                next += 1;
+            }
+            active.retain(|&t| zrange[t as usize].1 >= z);
+            per_layer.push(active.clone());
         }
-        active.retain(|&t| zrange[t as usize].1 >= z);
-        per_layer.push(active.clone());
+        let batch: Vec<Layer> = per_layer
+            .into_par_iter()
+            .zip(zb.par_iter())
+            .enumerate()
+            .map(|(k, (crossing, &z))| slice_layer(mesh, b * BATCH + k, z, &crossing, tol))
+            .collect();
+        layers.extend(batch);
     }
-
-    let layers = per_layer
-        .into_par_iter()
-        .zip(zs.par_iter())
-        .enumerate()
-        .map(|(index, (crossing, &z))| slice_layer(mesh, index, z, &crossing, tol))
-        .collect();
     Ok(LayerStack {
         layers,
         layer_height_mm: h,

@@ -24,7 +24,10 @@ fn slice_n(mesh: &Mesh, layers: usize) -> (LayerStack, f64) {
 
 /// All layers closed: no open chain, every contour ≥ 3 points, outers CCW and holes CW.
 fn assert_closed_and_oriented(name: &str, st: &LayerStack) {
-    for l in &st.layers {
+    for (k, l) in st.layers.iter().enumerate() {
+        assert_eq!(l.index, k, "{name}: layer order");
+        let z = st.first_z_mm + k as f64 * st.layer_height_mm;
+        assert_eq!(l.z_mm, z, "{name}: layer {k} height");
         assert!(
             l.open_chains.is_empty(),
             "{name}: layer {} z={} has open chains {:?}",
