@@ -187,13 +187,13 @@ pub fn slice(mesh: &Mesh, params: &SliceParams) -> LayerStackResult {
             (z[0].min(z[1]).min(z[2]), z[0].max(z[1]).max(z[2]))
         })
         .collect();
-    let mut order: Vec<u32> = (0..tris.len() as u32).collect();
-    order.sort_unstable_by(|&a, &b| {
-        zrange[a as usize]
-            .0
-            .total_cmp(&zrange[b as usize].0)
-            .then(a.cmp(&b))
-    });
+    let mut keyed: Vec<(f64, u32)> = zrange
+        .iter()
+        .enumerate()
+        .map(|(t, r)| (r.0, t as u32))
+        .collect();
+    keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let order: Vec<u32> = keyed.into_iter().map(|(_, t)| t).collect();
     // Layers go in batches: the sweep collects each batch's crossing triangles, then the batch
     // is chained in parallel, so memory stays bounded by one batch, not the whole stack.
     const BATCH: usize = 64;
