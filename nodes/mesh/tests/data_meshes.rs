@@ -203,7 +203,7 @@ fn torus_has_two_contours_and_annulus_area() {
 }
 
 #[test]
-fn plate_holes_is_outer_plus_five_holes_of_constant_area_band() {
+fn plate_holes_is_outer_plus_five_holes_in_every_layer() {
     let m = load("plate_holes.STL");
     assert_eq!(m.report().boundary_edges, 0);
     let st = slice(&m, &SliceParams::new(0.5)).unwrap();
