@@ -248,9 +248,15 @@ mod tests {
     #[test]
     fn inverse_matches_fixtures_and_round_trips() {
         let ts = travel_speed_for_width_mm_s(7.0, 5.53).unwrap();
-        assert!((ts - 10.475).abs() < 2e-3, "LW 7, WFS 5.53: TS {ts}, notes 10.475");
+        assert!(
+            (ts - 10.475).abs() < 2e-3,
+            "LW 7, WFS 5.53: TS {ts}, notes 10.475"
+        );
         let ts = travel_speed_for_width_mm_s(6.0, 4.39).unwrap();
-        assert!((ts - 7.868).abs() < 2e-3, "LW 6, WFS 4.39: TS {ts}, notes 7.868");
+        assert!(
+            (ts - 7.868).abs() < 2e-3,
+            "LW 6, WFS 4.39: TS {ts}, notes 7.868"
+        );
         for c in &CHART2 {
             let lw = bead_width_mm(c.ts_mm_s, c.wfs_m_min).unwrap();
             let ts = travel_speed_for_width_mm_s(lw, c.wfs_m_min).unwrap();
@@ -262,13 +268,19 @@ mod tests {
     fn floor_values_and_range_errors() {
         for (wfs, want) in [(3.56, 2.03), (4.39, 3.33), (5.53, 5.85)] {
             let lw = bead_width_unchecked_mm(14.1, wfs);
-            assert!((lw - want).abs() < 6e-3, "floor at WFS {wfs}: {lw}, notes {want}");
+            assert!(
+                (lw - want).abs() < 6e-3,
+                "floor at WFS {wfs}: {lw}, notes {want}"
+            );
         }
         assert!(bead_width_mm(1.0, 4.0).is_err());
         assert!(bead_width_mm(5.0, 6.0).is_err());
         assert!(bead_width_mm(f64::NAN, 4.0).is_err());
         let (lo, hi) = width_range_mm(5.53).unwrap();
-        assert!((lo - 6.536).abs() < 2e-3, "LW_min at WFS 5.53 = condition 12's model value");
+        assert!(
+            (lo - 6.536).abs() < 2e-3,
+            "LW_min at WFS 5.53 = condition 12's model value"
+        );
         assert!(travel_speed_for_width_mm_s(lo - 0.1, 5.53).is_err());
         assert!(travel_speed_for_width_mm_s(hi + 0.1, 5.53).is_err());
         assert!(bead_height_mm(4.0, 0.0, 5.0, 1.2).is_err());

@@ -276,12 +276,36 @@ mod tests {
     #[test]
     fn pre_toolpath_chart3() {
         let c = pre_toolpath_cost(&CostRates::default(), &PartVolumes::default());
-        assert!((c.deposited_m3 - 0.0014352).abs() < 1e-9, "V_d {}", c.deposited_m3);
-        assert!((c.deposition_h - 3.098).abs() < 1e-3, "t_D {}, notes 3.098 h", c.deposition_h);
-        assert!((c.deposition_sek - 2084.27).abs() < 0.05, "C_i {}", c.deposition_sek);
-        assert!((c.machining_h - 0.2665).abs() < 1e-4, "t_m {}", c.machining_h);
-        assert!((c.machining_sek - 106.59).abs() < 0.05, "C_m {}", c.machining_sek);
-        assert!((c.total_sek - 2481.6).abs() < 0.1, "C_AM {}, notes 2481.6", c.total_sek);
+        assert!(
+            (c.deposited_m3 - 0.0014352).abs() < 1e-9,
+            "V_d {}",
+            c.deposited_m3
+        );
+        assert!(
+            (c.deposition_h - 3.098).abs() < 1e-3,
+            "t_D {}, notes 3.098 h",
+            c.deposition_h
+        );
+        assert!(
+            (c.deposition_sek - 2084.27).abs() < 0.05,
+            "C_i {}",
+            c.deposition_sek
+        );
+        assert!(
+            (c.machining_h - 0.2665).abs() < 1e-4,
+            "t_m {}",
+            c.machining_h
+        );
+        assert!(
+            (c.machining_sek - 106.59).abs() < 0.05,
+            "C_m {}",
+            c.machining_sek
+        );
+        assert!(
+            (c.total_sek - 2481.6).abs() < 0.1,
+            "C_AM {}, notes 2481.6",
+            c.total_sek
+        );
         let sum = c.substrate_sek + c.waam_time_sek + c.wire_sek + c.machining_sek;
         assert!((sum - c.total_sek).abs() < 1e-9);
     }
@@ -297,13 +321,30 @@ mod tests {
             travel: TravelTime::Seconds(600.0),
         };
         let c = post_toolpath_cost(&r, &v, &totals);
-        assert!((c.deposition_sek - 1619.0).abs() < 5.0, "C_i^AM {}, thesis 1619 SEK", c.deposition_sek);
-        assert!((c.deposition_sek - 1623.5).abs() < 0.1, "notes: 1623.5 with t_D = 9026 s");
-        assert!((c.wire_sek - 553.95).abs() < 0.05, "wire part {}", c.wire_sek);
+        assert!(
+            (c.deposition_sek - 1619.0).abs() < 5.0,
+            "C_i^AM {}, thesis 1619 SEK",
+            c.deposition_sek
+        );
+        assert!(
+            (c.deposition_sek - 1623.5).abs() < 0.1,
+            "notes: 1623.5 with t_D = 9026 s"
+        );
+        assert!(
+            (c.wire_sek - 553.95).abs() < 0.05,
+            "wire part {}",
+            c.wire_sek
+        );
         totals.deposition_s = 2.5 * 3600.0;
         let c = post_toolpath_cost(&r, &v, &totals);
-        assert!((c.deposition_sek - 1620.6).abs() < 0.1, "notes: 1620.6 with t_D = 2.5 h");
-        assert!(c.machining_sek < 5.0, "eq. 5–6 give ≈3 SEK, not the thesis's 403 (notes B7)");
+        assert!(
+            (c.deposition_sek - 1620.6).abs() < 0.1,
+            "notes: 1620.6 with t_D = 2.5 h"
+        );
+        assert!(
+            c.machining_sek < 5.0,
+            "eq. 5–6 give ≈3 SEK, not the thesis's 403 (notes B7)"
+        );
     }
 
     #[test]
@@ -329,16 +370,31 @@ mod tests {
             travel: fixed,
         };
         let a = post_toolpath_cost(&r, &v, &base);
-        let b = post_toolpath_cost(&r, &v, &ToolpathTotals { travel: literal, ..base });
+        let b = post_toolpath_cost(
+            &r,
+            &v,
+            &ToolpathTotals {
+                travel: literal,
+                ..base
+            },
+        );
         assert!((a.deposition_sek - 1623.5).abs() < 0.1);
-        assert!(b.deposition_sek > 27_000.0, "literal eq. 19 inflates C_i^AM to {}", b.deposition_sek);
+        assert!(
+            b.deposition_sek > 27_000.0,
+            "literal eq. 19 inflates C_i^AM to {}",
+            b.deposition_sek
+        );
     }
 
     #[test]
     fn solid_machining_readings() {
         let r = CostRates::default();
         let c = solid_machining_cost(&r, &PartVolumes::default());
-        assert!((c.total_sek - 2440.5).abs() < 0.1, "Chart 3 V_i, V_r: {}", c.total_sek);
+        assert!(
+            (c.total_sek - 2440.5).abs() < 0.1,
+            "Chart 3 V_i, V_r: {}",
+            c.total_sek
+        );
         let mut v = PartVolumes::default();
         v.removed_m3 = v.initial_m3 - v.finished_m3;
         let c = solid_machining_cost(&r, &v);

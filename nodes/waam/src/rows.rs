@@ -175,8 +175,12 @@ pub fn rows_from_layer(
     conv: VectorConvention,
 ) -> Vec<ThesisRow> {
     let mut rows = Vec::new();
-    let mut k = first_k;
-    for s in layer.segments.iter().filter(|s| s.kind == SegmentKind::Deposit) {
+    for (k, s) in (first_k..).zip(
+        layer
+            .segments
+            .iter()
+            .filter(|s| s.kind == SegmentKind::Deposit),
+    ) {
         let chain: Chain = s
             .points
             .iter()
@@ -190,7 +194,6 @@ pub fn rows_from_layer(
             rows.push(r);
         }
         rows.push(ThesisRow::break_row(k));
-        k += 1;
     }
     rows
 }
@@ -222,7 +225,9 @@ pub fn write_csv<W: Write>(mut w: W, rows: &[ThesisRow]) -> io::Result<()> {
 /// 4. Consecutive duplicate points are removed; the chain ends with a break.
 pub fn chain_segments(segments: &[[[f64; 3]; 2]], tol_mm: f64) -> Chain {
     let same = |a: [f64; 3], b: [f64; 3]| {
-        (a[0] - b[0]).abs() <= tol_mm && (a[1] - b[1]).abs() <= tol_mm && (a[2] - b[2]).abs() <= tol_mm
+        (a[0] - b[0]).abs() <= tol_mm
+            && (a[1] - b[1]).abs() <= tol_mm
+            && (a[2] - b[2]).abs() <= tol_mm
     };
     // Step 1: fragments from consecutive rows.
     let mut frags: Vec<Vec<[f64; 3]>> = Vec::new();

@@ -3,8 +3,7 @@
 //! that no workspace crate offers on plain `[f64; 2]` rings.
 
 use cavalier_contours::polyline::{
-    PlineCreation,
-    seg_arc_radius_and_center, PlineSource, PlineSourceMut, PlineVertex, Polyline,
+    seg_arc_radius_and_center, PlineCreation, PlineSource, PlineSourceMut, PlineVertex, Polyline,
 };
 use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 
@@ -176,9 +175,17 @@ pub fn closed_from_arc_length(ring: &[P2], shift_mm: f64) -> Vec<P2> {
     let n = ring.len();
     let key = |p: &P2| (p[0] + p[1], p[0]);
     let first = (0..n)
-        .min_by(|&a, &b| key(&ring[a]).partial_cmp(&key(&ring[b])).unwrap_or(std::cmp::Ordering::Equal))
+        .min_by(|&a, &b| {
+            key(&ring[a])
+                .partial_cmp(&key(&ring[b]))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
         .unwrap_or(0);
-    let mut r: Vec<P2> = ring[first..].iter().chain(&ring[..first]).copied().collect();
+    let mut r: Vec<P2> = ring[first..]
+        .iter()
+        .chain(&ring[..first])
+        .copied()
+        .collect();
     let perimeter: f64 = (0..n).map(|i| dist(r[i], r[(i + 1) % n])).sum();
     let mut s = if perimeter > 0.0 {
         shift_mm.rem_euclid(perimeter)

@@ -15,7 +15,10 @@ pub fn raster_lines(rings: &[Vec<P2>], angle_deg: f64, spacing_mm: f64) -> Vec<V
     // Frame: u along the lines, v across them.
     let to_uv = |p: P2| [p[0] * c + p[1] * s, -p[0] * s + p[1] * c];
     let to_xy = |u: f64, v: f64| [u * c - v * s, u * s + v * c];
-    let uv: Vec<Vec<P2>> = rings.iter().map(|r| r.iter().map(|&p| to_uv(p)).collect()).collect();
+    let uv: Vec<Vec<P2>> = rings
+        .iter()
+        .map(|r| r.iter().map(|&p| to_uv(p)).collect())
+        .collect();
     let (mut vmin, mut vmax) = (f64::INFINITY, f64::NEG_INFINITY);
     for p in uv.iter().flatten() {
         vmin = vmin.min(p[1]);

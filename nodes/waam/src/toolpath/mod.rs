@@ -117,7 +117,10 @@ pub struct Segment {
 impl Segment {
     /// Path length (mm, 3D).
     pub fn length_mm(&self) -> f64 {
-        self.points.windows(2).map(|w| piece_len(&w[0], &w[1])).sum()
+        self.points
+            .windows(2)
+            .map(|w| piece_len(&w[0], &w[1]))
+            .sum()
     }
 
     /// Deposited volume Σ w·h·L over the pieces (mm³); 0 for travel (seed 004 eq. 25).
@@ -212,7 +215,10 @@ fn check_layer(layer: &LayerPolygons) -> Result<(), ToolpathError> {
         if r.len() < 3 {
             return Err(bad(format!("{} points, need at least 3", r.len())));
         }
-        if let Some(j) = r.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        if let Some(j) = r
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
             return Err(bad(format!("point {j} is not finite")));
         }
         if geom::signed_area(r).abs() < 1e-12 {
@@ -429,11 +435,7 @@ pub fn plan_stack(
     let mut from: Option<[f64; 3]> = None;
     for l in layers {
         let tp = plan_layer(l, process, from)?;
-        if let Some(p) = tp
-            .segments
-            .last()
-            .and_then(|s| s.points.last())
-        {
+        if let Some(p) = tp.segments.last().and_then(|s| s.points.last()) {
             from = Some([p.x_mm, p.y_mm, p.z_mm]);
         }
         out.push(tp);

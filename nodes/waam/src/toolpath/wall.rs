@@ -27,7 +27,7 @@ pub fn wall_distances(walls: &[Vec<P2>], p: P2, n: P2, max_mm: f64) -> (Option<f
 
 /// Mid-wall bead loops for one layer: each outer-derived loop of the region inset by
 /// `LW_min/2` is resampled every `sample_mm`, and each sample moved to the middle of the wall
-/// along its normal, with the wall-to-wall width clamped to `limits_mm` (seed 004 B4: "if the
+/// along its normal (or, where the wall is wider than LW_max, to LW_max/2 from the outer side), with the wall-to-wall width clamped to `limits_mm` (seed 004 B4: "if the
 /// width is larger than the data supports, use LW_max; if smaller, LW_min").
 ///
 /// Returned loops are open (no repeated last point) and CCW, like the outer contours. Hole-
@@ -72,8 +72,14 @@ pub fn mid_wall_loops(
                 });
                 continue;
             };
-            let shift = (b_in - a_out) / 2.0;
             let measured = a_out + b_in;
+            // Mid-wall when the bead can fill the wall; a wall wider than LW_max (or a ray that
+            // runs along a wall near a corner) keeps the bead LW_max/2 from the outer side.
+            let shift = if measured <= hi {
+                (b_in - a_out) / 2.0
+            } else {
+                hi / 2.0 - a_out
+            };
             samples.push(WallSample {
                 xy: [p[0] + normal[0] * shift, p[1] + normal[1] * shift],
                 measured_mm: measured,
