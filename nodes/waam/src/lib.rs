@@ -12,12 +12,14 @@
 //! - [`cost`]: cost before and after the toolpath (eq. 1–6, 15–24, Chart 3).
 //! - [`stock`]: the deposited beads as boxes in a binary STL for CAM (§4.8).
 //! - [`process`]: the process profile (YAML, `config/processes/waam.yaml`).
+//! - [`to_msg`]: the planned layers as a `cell_msgs::Toolpath` (kept apart from the algorithms).
 
 pub mod bead;
 pub mod cost;
 pub mod process;
 pub mod rows;
 pub mod stock;
+pub mod to_msg;
 pub mod toolpath;
 
 pub use process::{ProcessError, WaamProcess, WidthMode};
