@@ -102,6 +102,9 @@ pub struct WaamProcess {
     pub start_shift_mm: f64,
     /// Speed of non-depositing travel moves (mm/s). Default 50.
     pub travel_move_speed_mm_s: f64,
+    /// Height (mm) by which travel moves rise above the higher of their two ends, to clear the
+    /// beads. Default 0 (the thesis moves straight; its travel is only costed, eq. 19).
+    pub travel_lift_mm: f64,
     /// Time per arc start/stop pair (s), added to a layer's travel time. Default 2.0 (Chart 4's
     /// 10 min for 302 starts/stops, notes B7).
     pub arc_start_stop_s: f64,
@@ -135,6 +138,7 @@ impl Default for WaamProcess {
             infill_link_max_ratio: 3.0,
             start_shift_mm: 25.0,
             travel_move_speed_mm_s: 50.0,
+            travel_lift_mm: 0.0,
             arc_start_stop_s: 2.0,
             dwell_s: 0.0,
             arc_tolerance_mm: 0.05,
@@ -205,6 +209,7 @@ impl WaamProcess {
         }
         let non_negative = [
             ("start_shift_mm", self.start_shift_mm),
+            ("travel_lift_mm", self.travel_lift_mm),
             ("arc_start_stop_s", self.arc_start_stop_s),
             ("dwell_s", self.dwell_s),
         ];

@@ -389,3 +389,43 @@ fn bad_input_is_an_error() {
     let tp = plan_layer(&layer(0, vec![square(0.0, 0.0, 5.0)]), &p, None).unwrap();
     assert!(tp.segments.is_empty() && tp.deposited_volume_mm3 == 0.0);
 }
+
+#[test]
+fn reversed_rings_are_repaired_by_nesting() {
+    let p = WaamProcess::default();
+    let good = vec![square(0.0, 0.0, 100.0), rev(square(40.0, 40.0, 20.0))];
+    let bad = vec![rev(square(0.0, 0.0, 100.0)), square(40.0, 40.0, 20.0)];
+    let a = plan_layer(&layer(2, good), &p, None).unwrap();
+    let b = plan_layer(&layer(2, bad), &p, None).unwrap();
+    assert_eq!(a, b, "orientation comes from nesting, not from the caller");
+}
+
+#[test]
+fn travel_lift_clears_the_beads() {
+    let p = WaamProcess {
+        travel_lift_mm: 5.0,
+        ..WaamProcess::default()
+    };
+    let layers: Vec<LayerPolygons> = (0..2)
+        .map(|i| {
+            layer(
+                i,
+                vec![square(0.0, 0.0, 60.0), rev(square(20.0, 20.0, 20.0))],
+            )
+        })
+        .collect();
+    let tps = plan_stack(&layers, &p).unwrap();
+    let mut n = 0;
+    for l in &tps {
+        for s in l.segments.iter().filter(|s| s.kind == SegmentKind::Travel) {
+            assert_eq!(s.points.len(), 4);
+            let top = s.points[0].z_mm.max(s.points[3].z_mm) + 5.0;
+            assert!(
+                (s.points[1].z_mm - top).abs() < 1e-12 && (s.points[2].z_mm - top).abs() < 1e-12
+            );
+            assert!(s.points.iter().all(|q| !q.arc_on && q.bead_width_mm == 0.0));
+            n += 1;
+        }
+    }
+    assert!(n >= 3, "{n} travels");
+}

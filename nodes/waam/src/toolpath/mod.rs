@@ -26,8 +26,9 @@ pub struct LayerPolygons {
     pub index: usize,
     /// Height of the toolpath (mm).
     pub z_mm: f64,
-    /// Closed rings (mm): outer contours counter-clockwise, holes clockwise, no repeated last
-    /// point.
+    /// Closed, simple rings (mm): outer contours counter-clockwise, holes clockwise, no repeated
+    /// last point. The planner re-derives the orientation from nesting (even depth = outer),
+    /// so a reversed ring is repaired, not misread.
     pub outers_and_holes: Vec<Vec<[f64; 2]>>,
 }
 
@@ -228,6 +229,30 @@ fn check_layer(layer: &LayerPolygons) -> Result<(), ToolpathError> {
     Ok(())
 }
 
+/// The rings oriented by nesting: a ring inside an even number of other rings is an outer
+/// contour (made CCW), inside an odd number a hole (made CW). The input convention (outer CCW,
+/// holes CW) is thereby checked and repaired instead of trusted: a reversed outer would
+/// otherwise be offset outwards.
+fn oriented_rings(rings: &[Vec<P2>]) -> Vec<Vec<P2>> {
+    rings
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let depth = rings
+                .iter()
+                .enumerate()
+                .filter(|&(j, o)| j != i && geom::inside(std::slice::from_ref(o), r[0]))
+                .count();
+            let want_ccw = depth % 2 == 0;
+            let mut r = r.clone();
+            if (geom::signed_area(&r) > 0.0) != want_ccw {
+                r.reverse();
+            }
+            r
+        })
+        .collect()
+}
+
 /// A deposit polyline with per-point (width, speed) before it becomes a [`Segment`].
 struct Bead {
     role: SegmentRole,
@@ -248,7 +273,7 @@ pub fn plan_layer(
 ) -> Result<LayerToolpath, ToolpathError> {
     process.check("process")?;
     check_layer(layer)?;
-    let rings = &layer.outers_and_holes;
+    let rings = &oriented_rings(&layer.outers_and_holes);
     let shift = process.start_shift_mm * layer.index as f64;
     let angle = process.infill_angle_deg + process.infill_layer_rotation_deg * layer.index as f64;
     let tol = process.arc_tolerance_mm;
@@ -362,10 +387,18 @@ fn assemble(
         let s = b.pts[0];
         if let Some(c) = cur {
             if (c[0] - s[0]).hypot(c[1] - s[1]) > 1e-9 || (c[2] - z).abs() > 1e-9 {
+                let lift = process.travel_lift_mm;
+                let top = c[2].max(z) + lift;
+                let mut points = vec![travel_pt(c[0], c[1], c[2])];
+                if lift > 0.0 {
+                    points.push(travel_pt(c[0], c[1], top));
+                    points.push(travel_pt(s[0], s[1], top));
+                }
+                points.push(travel_pt(s[0], s[1], z));
                 segments.push(Segment {
                     kind: SegmentKind::Travel,
                     role: SegmentRole::Travel,
-                    points: vec![travel_pt(c[0], c[1], c[2]), travel_pt(s[0], s[1], z)],
+                    points,
                 });
             }
         }
