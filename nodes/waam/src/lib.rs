@@ -13,6 +13,27 @@
 //! - [`stock`]: the deposited beads as boxes in a binary STL for CAM (§4.8).
 //! - [`process`]: the process profile (YAML, `config/processes/waam.yaml`).
 //! - [`to_msg`]: the planned layers as a `cell_msgs::Toolpath` (kept apart from the algorithms).
+//!
+//! ```
+//! use cell_waam::{plan_stack, LayerPolygons, WaamProcess};
+//! use cell_waam::cost::{post_toolpath_cost, PartVolumes};
+//! use cell_waam::toolpath::toolpath_totals;
+//!
+//! let square = vec![[0.0, 0.0], [80.0, 0.0], [80.0, 80.0], [0.0, 80.0]];
+//! let layers: Vec<LayerPolygons> = (0..3)
+//!     .map(|i| LayerPolygons {
+//!         index: i,
+//!         z_mm: 1.6 * (i + 1) as f64,
+//!         outers_and_holes: vec![square.clone()],
+//!     })
+//!     .collect();
+//! let process = WaamProcess::default();
+//! let layers = plan_stack(&layers, &process).unwrap();
+//! let cost = post_toolpath_cost(&process.cost, &PartVolumes::default(), &toolpath_totals(&layers));
+//! assert!(cost.wire_sek > 0.0 && cost.deposition_sek > cost.wire_sek);
+//! let mut stl = Vec::new();
+//! cell_waam::stock::write_stock_stl(&mut stl, &cell_waam::stock::bead_boxes(&layers)).unwrap();
+//! ```
 
 pub mod bead;
 pub mod cost;

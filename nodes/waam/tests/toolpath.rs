@@ -429,3 +429,37 @@ fn travel_lift_clears_the_beads() {
     }
     assert!(n >= 3, "{n} travels");
 }
+
+#[test]
+fn two_perimeters_step_by_one_bead() {
+    let p = WaamProcess {
+        perimeters: 2,
+        start_shift_mm: 0.0,
+        ..WaamProcess::default()
+    };
+    let w = p.fixed_width_mm();
+    let tp = plan_layer(&layer(0, vec![square(0.0, 0.0, 100.0)]), &p, None).unwrap();
+    let perims: Vec<_> = tp
+        .segments
+        .iter()
+        .filter(|s| s.role == SegmentRole::Perimeter)
+        .collect();
+    assert_eq!(perims.len(), 2);
+    for (k, s) in perims.iter().enumerate() {
+        let d = w / 2.0 + k as f64 * w;
+        let q = s.points[0];
+        assert!(
+            geom::dist([q.x_mm, q.y_mm], [d, d]) < 1e-9,
+            "loop {k} at {d} mm"
+        );
+    }
+    for s in tp.segments.iter().filter(|s| s.role == SegmentRole::Infill) {
+        for q in &s.points {
+            let m = q.x_mm.min(q.y_mm).min(100.0 - q.x_mm).min(100.0 - q.y_mm);
+            assert!(
+                m >= 2.5 * w - 1e-9,
+                "infill {m} mm from the wall, want ≥ 2.5 w"
+            );
+        }
+    }
+}
