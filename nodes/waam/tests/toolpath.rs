@@ -463,3 +463,85 @@ fn two_perimeters_step_by_one_bead() {
         }
     }
 }
+
+#[test]
+fn zigzag_links_never_leave_a_concave_region() {
+    // A U: two 60 mm arms joined at the bottom, 80 mm gap between the arms.
+    let u = vec![
+        [0.0, 0.0],
+        [200.0, 0.0],
+        [200.0, 200.0],
+        [140.0, 200.0],
+        [140.0, 60.0],
+        [60.0, 60.0],
+        [60.0, 200.0],
+        [0.0, 200.0],
+    ];
+    // The same with a 10 mm slot, and links allowed up to 10 spacings: only the inside test
+    // keeps them from jumping the slot.
+    let slot = vec![
+        [0.0, 0.0],
+        [200.0, 0.0],
+        [200.0, 200.0],
+        [105.0, 200.0],
+        [105.0, 60.0],
+        [95.0, 60.0],
+        [95.0, 200.0],
+        [0.0, 200.0],
+    ];
+    for (u, angle, ratio) in [
+        (&u, 0.0, 3.0),
+        (&u, 90.0, 3.0),
+        (&u, 37.0, 3.0),
+        (&slot, 0.0, 10.0),
+        (&slot, 20.0, 10.0),
+    ] {
+        let p = WaamProcess {
+            infill_angle_deg: angle,
+            infill_link_max_ratio: ratio,
+            ..WaamProcess::default()
+        };
+        let w = p.fixed_width_mm();
+        let tp = plan_layer(&layer(0, vec![u.clone()]), &p, None).unwrap();
+        let region = geom::inset(std::slice::from_ref(u), 1.5 * w, p.arc_tolerance_mm);
+        let mut n = 0;
+        for s in tp.segments.iter().filter(|s| s.role == SegmentRole::Infill) {
+            for q in sample(s) {
+                assert!(
+                    geom::inside_or_on(&region, q, 1e-6),
+                    "angle {angle}: infill point {q:?} outside the inset U"
+                );
+                n += 1;
+            }
+        }
+        assert!(n > 1000, "angle {angle}: {n} samples");
+    }
+}
+
+#[test]
+fn wall_driven_starts_move_between_layers() {
+    let p = WaamProcess {
+        width_mode: WidthMode::WallDriven,
+        ..WaamProcess::default()
+    };
+    let layers: Vec<LayerPolygons> = (0..6)
+        .map(|i| {
+            layer(
+                i,
+                vec![square(0.0, 0.0, 100.0), rev(square(9.0, 9.0, 82.0))],
+            )
+        })
+        .collect();
+    let tps = plan_stack(&layers, &p).unwrap();
+    for w in tps.windows(2) {
+        let (a, b) = (
+            w[0].first_weld_start().unwrap(),
+            w[1].first_weld_start().unwrap(),
+        );
+        let d = geom::dist(a, b);
+        assert!(
+            d >= 0.6 * p.start_shift_mm,
+            "starts {a:?}, {b:?} only {d} mm apart"
+        );
+    }
+}
