@@ -87,8 +87,8 @@ pub struct WaamProcess {
     pub perimeters: usize,
     /// Whether fixed mode fills the inside of the perimeters with infill. Default true.
     pub infill: bool,
-    /// Infill line spacing as a fraction of the bead width. Default 1.0: rectangular beads side
-    /// by side (the thesis's rectangular cross-section, eq. 25).
+    /// Infill line spacing as a fraction of the bead width (≥ 0.1). Default 1.0: rectangular
+    /// beads side by side (the thesis's rectangular cross-section, eq. 25).
     pub infill_spacing_ratio: f64,
     /// Infill angle of layer 0 (degrees from +X). Default 0.
     pub infill_angle_deg: f64,
@@ -111,10 +111,10 @@ pub struct WaamProcess {
     /// Interlayer dwell (cooling) time after each layer (s). Default 0, as in the thesis's
     /// costing (t_wait = 0: the robot prints other parts meanwhile).
     pub dwell_s: f64,
-    /// Chord tolerance for flattening the round joins of offsets (mm). Default 0.05.
+    /// Chord tolerance for flattening the round joins of offsets (mm, ≥ 1e-4). Default 0.05.
     pub arc_tolerance_mm: f64,
-    /// Longest spacing of wall-width samples along a wall-driven path (mm); the thesis inserts
-    /// points where the wall geometry changes (Fig. 15). Default 2.
+    /// Longest spacing of wall-width samples along a wall-driven path (mm, ≥ 0.05); the thesis
+    /// inserts points where the wall geometry changes (Fig. 15). Default 2.
     pub wall_sample_mm: f64,
     /// Cost rates (seed 004 Chart 3).
     pub cost: CostRates,
@@ -205,6 +205,16 @@ impl WaamProcess {
         for (field, v) in positive {
             if !(v.is_finite() && v > 0.0) {
                 return Err(invalid(field, v, "must be finite and > 0"));
+            }
+        }
+        // Lower bounds that keep the line and sample counts finite (no hang on a typo).
+        for (field, v, min) in [
+            ("infill_spacing_ratio", self.infill_spacing_ratio, 0.1),
+            ("wall_sample_mm", self.wall_sample_mm, 0.05),
+            ("arc_tolerance_mm", self.arc_tolerance_mm, 1e-4),
+        ] {
+            if v < min {
+                return Err(invalid(field, v, &format!("must be >= {min}")));
             }
         }
         let non_negative = [

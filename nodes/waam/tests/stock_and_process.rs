@@ -176,6 +176,28 @@ fn yaml_errors_name_line_and_field() {
         ),
         "{e}"
     );
+    let e = WaamProcess::from_yaml_str("infill_spacing_ratio: 1e-9\n", "t.yaml").unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ProcessError::Invalid {
+                field: "infill_spacing_ratio",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = WaamProcess::from_yaml_str("width_min_mm: 20\n", "t.yaml").unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ProcessError::Invalid {
+                field: "width_min_mm",
+                ..
+            }
+        ),
+        "{e}"
+    );
     let e = WaamProcess::from_yaml_str("dwell_s: -1\n", "t.yaml").unwrap_err();
     assert!(
         matches!(
