@@ -214,6 +214,48 @@ mod tests {
         3.315, 1.955, 1.743, 1.768, 2.407, 2.019, 1.910, 1.684, 1.913, 1.622, 1.465, 1.388,
     ];
 
+    /// One test per Chart 2 condition: eq. 14 width, eq. 28 height, and the inverse of eq. 14
+    /// back to the condition's travel speed.
+    fn check_condition(n: usize) {
+        let c = CHART2[n - 1];
+        assert_eq!(c.condition as usize, n);
+        let lw = bead_width_mm(c.ts_mm_s, c.wfs_m_min).unwrap();
+        assert!(
+            (lw - MODEL_LW[n - 1]).abs() < 1.5e-3,
+            "condition {n} (TS {} mm/s, WFS {} m/min): eq. 14 gives {lw:.4} mm, thesis-derived \
+             {} mm, measured LW_ext {} mm",
+            c.ts_mm_s,
+            c.wfs_m_min,
+            MODEL_LW[n - 1],
+            c.lw_ext_mm
+        );
+        let h = bead_height_mm(c.wfs_m_min, c.ts_mm_s, c.lw_ext_mm, 1.2).unwrap();
+        assert!(
+            (h - HEIGHT[n - 1]).abs() < 1.5e-3,
+            "condition {n}: eq. 28 with measured LW {} gives h {h:.4} mm, thesis-derived {} mm",
+            c.lw_ext_mm,
+            HEIGHT[n - 1]
+        );
+        let ts = travel_speed_for_width_mm_s(lw, c.wfs_m_min).unwrap();
+        assert!(
+            (ts - c.ts_mm_s).abs() < 1e-9,
+            "condition {n}: inverse of eq. 14 gives TS {ts}, Chart 2 {}",
+            c.ts_mm_s
+        );
+    }
+
+    macro_rules! condition_tests {
+        ($($name:ident => $n:expr),* $(,)?) => {
+            $(#[test] fn $name() { check_condition($n); })*
+        };
+    }
+    condition_tests!(
+        chart2_condition_01 => 1, chart2_condition_02 => 2, chart2_condition_03 => 3,
+        chart2_condition_04 => 4, chart2_condition_05 => 5, chart2_condition_06 => 6,
+        chart2_condition_07 => 7, chart2_condition_08 => 8, chart2_condition_09 => 9,
+        chart2_condition_10 => 10, chart2_condition_11 => 11, chart2_condition_12 => 12,
+    );
+
     #[test]
     fn eq14_width_all_twelve_conditions() {
         let mut max_err: f64 = 0.0;
