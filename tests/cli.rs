@@ -140,6 +140,29 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "{machine}"
     );
     assert!(program.contains("G93"), "4-axis inverse-time program");
+    // The sheet job: the plate nest sequenced, emitted for the GRBL laser and run to its end
+    // on the second simulator.
+    let sheet = stdout
+        .lines()
+        .find(|l| l.starts_with("| sheet   |"))
+        .unwrap_or_else(|| panic!("no sheet row in {stdout}"));
+    assert!(
+        sheet.contains("| sheet   | 25 contours by ") && sheet.contains(" + improvement"),
+        "4 plates with 5 holes each, and a disc: {sheet}"
+    );
+    let sheet_program = std::fs::read_to_string(out_dir.path().join("demo-sheet.ngc")).unwrap();
+    let sheet_lines = sheet_program.lines().count();
+    assert!(sheet_program.contains("M4"), "laser-mode program");
+    let sheet_machine = stdout
+        .lines()
+        .find(|l| l.starts_with("| sheet machine |"))
+        .unwrap_or_else(|| panic!("no sheet machine row in {stdout}"));
+    assert!(
+        sheet_machine.contains(&format!(
+            "finished: line {sheet_lines} of {sheet_lines} acknowledged"
+        )),
+        "{sheet_machine}"
+    );
     // The recorder's bag holds the job's messages (finished: it has its summary).
     let info = cell_bag::BagInfo::open(out_dir.path().join("bag")).expect("the demo's bag reads");
     for (topic, ros_type) in [
@@ -200,7 +223,7 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         info.message_count
     );
     assert!(outputs.contains(&bag_row), "{bag_row:?} not in {outputs}");
-    for file in ["cell.rrd", "bag.rrd", "demo-wing.ngc"] {
+    for file in ["cell.rrd", "bag.rrd", "demo-wing.ngc", "demo-sheet.ngc"] {
         let path = out_dir.path().join(file).display().to_string();
         assert!(outputs.contains(&path), "{path} not in {outputs}");
     }
@@ -225,6 +248,9 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "/emitter/log",
         "/machine/grbl-sim/position",
         "/machine/grbl-sim/trace/0",
+        "/sheet/heat",
+        "/sheet/toolpath",
+        "/machine/grbl-laser-sim/trace/0",
     ] {
         assert!(dump.contains(entity), "cell.rrd has no {entity}");
     }

@@ -12,7 +12,7 @@ use cell_msgs::{
     CutPlan, HeatMap, SequenceSheetFeedback, SequenceSheetGoal, SequenceSheetResult, Toolpath,
     ToolpathSegment,
 };
-use cell_runtime::{action::GoalStatusEnum, QosPreset};
+use cell_runtime::{action::GoalStatusEnum, QosPreset, Via};
 use cell_sequencer::{
     job::{load_problem, LayoutSource, SheetJob},
     node::{run, SequencerParams},
@@ -46,8 +46,9 @@ fn assert_valid_order(problem: &Problem, order: &[u32]) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
     let domain = fresh_domain();
-    let server_node = node("sequencer", domain, false);
-    let client_node = node("operator", domain, false);
+    // Both on the shared-memory fast path: heat frames must take it (issue 7: iceoryx2).
+    let server_node = node("sequencer", domain, true);
+    let client_node = node("operator", domain, true);
     let params = SequencerParams {
         max_iterations: 30,
         feedback_every: 1,
@@ -155,6 +156,11 @@ async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
     let published = within(plans.recv()).await.expect("cut_plan topic");
     assert_eq!(published.message.order, plan.order);
     let frame = within(heat.recv()).await.expect("sheet_heat topic");
+    assert_eq!(
+        frame.via,
+        Via::SharedMemory,
+        "heat frames go over iceoryx2 on one host"
+    );
     assert_eq!(frame.message.quantity, "sheet_temperature");
     assert!(frame.message.width > 1 && frame.message.height > 1);
     assert_eq!(

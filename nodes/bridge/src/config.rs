@@ -42,6 +42,10 @@ pub const EMBEDDED_CONTROLLERS: &[(&str, &str)] = &[
         include_str!("../../../config/controllers/grbl-xyuv.yaml"),
     ),
     (
+        "grbl-laser-sim",
+        include_str!("../../../config/controllers/grbl-laser-sim.yaml"),
+    ),
+    (
         "abb-irb2600-waam",
         include_str!("../../../config/controllers/abb-irb2600-waam.yaml"),
     ),

@@ -4,7 +4,8 @@
 //!   supervises them (see [`cell_launch`]).
 //! - `cell demo` runs the demo cell from `launch_scripts/demo.launch.yaml` (embedded in the
 //!   binary, so it works from any directory): a hot-wire wing planned, emitted and streamed to
-//!   the GRBL simulator; the program, the bag, `cell.rrd` and `bag.rrd` in `demo-out/`.
+//!   the GRBL simulator, then a sheet nest sequenced, emitted and run on a GRBL laser simulator;
+//!   the programs, the bag, `cell.rrd` and `bag.rrd` in `demo-out/`.
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
 //! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
@@ -78,8 +79,9 @@ enum Command {
         args: Vec<String>,
     },
     /// Run the demo cell: a hot-wire wing planned, emitted for the 4-axis GRBL cutter and
-    /// streamed to the in-repo GRBL simulator, with a summary table at the end. Writes the
-    /// program, the bag of every topic, `cell.rrd` (every node's Rerun log in one recording)
+    /// streamed to the in-repo GRBL simulator, then a sheet nest sequenced and cut on a GRBL
+    /// laser simulator, with a summary table at the end. Writes the
+    /// programs, the bag of every topic, `cell.rrd` (every node's Rerun log in one recording)
     /// and `bag.rrd` (the bag drawn) to --out, and lists them last.
     Demo {
         /// Output directory: the programs, the bag (`bag/`, drawn into `bag.rrd`),

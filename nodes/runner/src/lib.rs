@@ -1,9 +1,12 @@
-//! The `job_runner` node: runs one hot-wire job through the cell, as an operator would.
+//! The `job_runner` node: runs the cell's jobs, as an operator would.
 //!
 //! 1. Sends a `plan_hotwire` goal to the planner and follows its feedback.
 //! 2. Waits for the emitter's `MachineProgram` for that job on `program_topic`.
 //! 3. Sends it to the machine_bridge as an `execute_program` goal and follows it.
-//! 4. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
+//! 4. If `sheet_job_id` is set, does the same for a sheet: a `sequence_sheet` goal to the
+//!    sequencer (the layout embedded from `config/sheets/` or read from a file), the program an
+//!    emitter makes of its toolpath, and `execute_program`.
+//! 5. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
 //!    stage and why.
 //!
 //! `cell demo` runs it with a reduced iteration count and stops the other nodes once it exits.
@@ -13,7 +16,8 @@ use std::time::{Duration, Instant};
 use anyhow::{anyhow, bail, Context as _};
 use cell_msgs::{
     ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, MachineProgram,
-    PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult,
+    PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, SequenceSheetFeedback,
+    SequenceSheetGoal, SequenceSheetResult,
 };
 use cell_runtime::action::{request_result, ActionClient, GoalStatusEnum};
 use cell_runtime::{CellNode, QosPreset};
@@ -22,6 +26,13 @@ use serde::{Deserialize, Serialize};
 
 /// The Rerun entity each job's summary rows go to.
 pub const RERUN_LOG: &str = "/jobs/log";
+
+/// Sheet layouts shipped in `config/sheets/`, embedded so the demo runs from any directory:
+/// (name, JSON text in the sequencer's layout format).
+pub const EMBEDDED_SHEETS: &[(&str, &str)] = &[(
+    "plate-nest",
+    include_str!("../../../config/sheets/plate-nest.json"),
+)];
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -57,6 +68,14 @@ pub struct RunnerParams {
     pub program_topic: String,
     /// Give up after this long (s).
     pub timeout_s: f64,
+    /// Job id of the sheet job; empty: no sheet job.
+    pub sheet_job_id: String,
+    /// Sheet layout: a name in [`EMBEDDED_SHEETS`] or a `.json`/`.dxf` path.
+    pub sheet_layout: String,
+    /// Machine profile the sheet is sequenced and emitted for.
+    pub sheet_machine_profile: String,
+    /// Improvement time budget of the sheet job (s).
+    pub sheet_time_budget_s: f64,
 }
 
 impl Default for RunnerParams {
@@ -77,6 +96,10 @@ impl Default for RunnerParams {
             machine_id: String::new(),
             program_topic: "machine_program".into(),
             timeout_s: 900.0,
+            sheet_job_id: String::new(),
+            sheet_layout: "plate-nest".into(),
+            sheet_machine_profile: "grbl-laser".into(),
+            sheet_time_budget_s: 2.0,
         }
     }
 }
@@ -96,18 +119,61 @@ pub struct JobSummary {
     pub run: ExecuteProgramResult,
     /// Running time.
     pub run_time: Duration,
+    /// The sheet job, if one was run.
+    pub sheet: Option<SheetSummary>,
+}
+
+/// What the sheet job's stages gave, for the summary.
+#[derive(Debug, Clone, Default)]
+pub struct SheetSummary {
+    /// The sequencer's result.
+    pub sequence: SequenceSheetResult,
+    /// Sequencing time.
+    pub sequence_time: Duration,
+    /// The program.
+    pub program: MachineProgram,
+    /// The run's result.
+    pub run: ExecuteProgramResult,
+    /// Running time.
+    pub run_time: Duration,
+}
+
+fn outcome_name(run: &ExecuteProgramResult) -> &'static str {
+    match run.outcome {
+        ExecuteProgramResult::OUTCOME_FINISHED => "finished",
+        ExecuteProgramResult::OUTCOME_ABORTED => "aborted",
+        ExecuteProgramResult::OUTCOME_ALARM => "alarm",
+        ExecuteProgramResult::OUTCOME_REJECTED_LINE => "line rejected",
+        ExecuteProgramResult::OUTCOME_LINK_LOST => "link lost",
+        _ => "refused",
+    }
+}
+
+/// `name (dialect, lines, sha256 prefix…)` of a program.
+fn program_cell(program: &MachineProgram) -> String {
+    let sha = program.sha256.get(..12).unwrap_or(&program.sha256);
+    format!(
+        "{} ({}, {} lines, sha256 {sha}…)",
+        program.files.first().map_or("-", |file| file.name.as_str()),
+        program.dialect,
+        program.line_count
+    )
+}
+
+/// `outcome: line a of n acknowledged in t s, k link drops` of a run.
+fn run_cell(run: &ExecuteProgramResult, program: &MachineProgram, time: Duration) -> String {
+    format!(
+        "{}: line {} of {} acknowledged in {:.1} s, {} link drops",
+        outcome_name(run),
+        run.last_acked_line,
+        program.line_count,
+        time.as_secs_f64(),
+        run.reconnects
+    )
 }
 
 impl std::fmt::Display for JobSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let outcome = match self.run.outcome {
-            ExecuteProgramResult::OUTCOME_FINISHED => "finished",
-            ExecuteProgramResult::OUTCOME_ABORTED => "aborted",
-            ExecuteProgramResult::OUTCOME_ALARM => "alarm",
-            ExecuteProgramResult::OUTCOME_REJECTED_LINE => "line rejected",
-            ExecuteProgramResult::OUTCOME_LINK_LOST => "link lost",
-            _ => "refused",
-        };
         writeln!(f, "| stage   | result |")?;
         writeln!(f, "|---------|--------|")?;
         writeln!(
@@ -118,34 +184,40 @@ impl std::fmt::Display for JobSummary {
             self.plan.baseline_loss,
             self.plan.final_loss
         )?;
-        let sha = self
-            .program
-            .sha256
-            .get(..12)
-            .unwrap_or(&self.program.sha256);
-        writeln!(
-            f,
-            "| program | {} ({}, {} lines, sha256 {sha}…) |",
-            self.program
-                .files
-                .first()
-                .map_or("-", |file| file.name.as_str()),
-            self.program.dialect,
-            self.program.line_count
-        )?;
+        writeln!(f, "| program | {} |", program_cell(&self.program))?;
         write!(
             f,
-            "| machine | {outcome}: line {} of {} acknowledged in {:.1} s, {} link drops |",
-            self.run.last_acked_line,
-            self.program.line_count,
-            self.run_time.as_secs_f64(),
-            self.run.reconnects
-        )
+            "| machine | {} |",
+            run_cell(&self.run, &self.program, self.run_time)
+        )?;
+        if let Some(s) = &self.sheet {
+            let plan = &s.sequence.plan;
+            write!(
+                f,
+                "\n| sheet   | {} contours by {}{}: idle {:.0} mm, cut {:.0} mm, {} overheats, \
+                 in {:.1} s |",
+                plan.order.len(),
+                plan.policy,
+                if plan.improved { " + improvement" } else { "" },
+                plan.idle_length_mm,
+                plan.cut_length_mm,
+                plan.overheats,
+                s.sequence_time.as_secs_f64()
+            )?;
+            write!(f, "\n| sheet program | {} |", program_cell(&s.program))?;
+            write!(
+                f,
+                "\n| sheet machine | {} |",
+                run_cell(&s.run, &s.program, s.run_time)
+            )?;
+        }
+        Ok(())
     }
 }
 
 type PlanClient = ActionClient<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>;
 type RunClient = ActionClient<ExecuteProgramGoal, ExecuteProgramResult, ExecuteProgramFeedback>;
+type SheetClient = ActionClient<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>;
 
 /// Sends a goal and waits for its result, logging feedback through `describe` at most once a
 /// second.
@@ -245,10 +317,37 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     let plan_time = t0.elapsed();
     tracing::info!("{}", plan.message);
 
+    let program = wait_for_program(&mut programs, p, &p.job_id, timeout).await?;
+    let t1 = Instant::now();
+    let run = execute(&run_client, &program, &p.machine_id, timeout).await?;
+    let run_time = t1.elapsed();
+    let sheet = if p.sheet_job_id.is_empty() {
+        None
+    } else {
+        Some(run_sheet(node, p, &mut programs, &run_client, timeout).await?)
+    };
+    Ok(JobSummary {
+        iterations: last_iteration.load(std::sync::atomic::Ordering::Relaxed),
+        plan,
+        plan_time,
+        program,
+        run,
+        run_time,
+        sheet,
+    })
+}
+
+/// Waits for the emitter's program for `job_id`.
+async fn wait_for_program(
+    programs: &mut cell_runtime::Subscriber<MachineProgram>,
+    p: &RunnerParams,
+    job_id: &str,
+    timeout: Duration,
+) -> anyhow::Result<MachineProgram> {
     let program = tokio::time::timeout(timeout, async {
         loop {
             match programs.recv().await {
-                Some(r) if r.message.job_id == p.job_id => return Ok(r.message),
+                Some(r) if r.message.job_id == job_id => return Ok(r.message),
                 Some(_) => continue,
                 None => return Err(anyhow!("{}: the subscription ended", p.program_topic)),
             }
@@ -257,8 +356,7 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     .await
     .map_err(|_| {
         anyhow!(
-            "no program for {} on {} within {timeout:?}",
-            p.job_id,
+            "no program for {job_id} on {} within {timeout:?}",
             p.program_topic
         )
     })??;
@@ -268,29 +366,87 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
         program.line_count,
         program.dialect
     );
+    Ok(program)
+}
 
-    let t1 = Instant::now();
+/// Runs a program on the machine_bridge and follows it.
+async fn execute(
+    run_client: &RunClient,
+    program: &MachineProgram,
+    machine_id: &str,
+    timeout: Duration,
+) -> anyhow::Result<ExecuteProgramResult> {
     let goal = ExecuteProgramGoal {
         program: program.clone(),
-        machine_id: p.machine_id.clone(),
+        machine_id: machine_id.to_owned(),
         start_line: 0,
     };
-    let (_, run) = follow(&run_client, goal, "execute_program", timeout, |f| {
+    let (_, run) = follow(run_client, goal, "execute_program", timeout, |f| {
         format!(
             "line {}/{} ({:.0} %)",
             f.acked_line, f.total_lines, f.percent_done
         )
     })
     .await?;
-    let summary = JobSummary {
-        iterations: last_iteration.load(std::sync::atomic::Ordering::Relaxed),
-        plan,
-        plan_time,
+    Ok(run)
+}
+
+/// The sheet job: sequence, wait for its program, run it (stage 4 of the module docs).
+async fn run_sheet(
+    node: &CellNode,
+    p: &RunnerParams,
+    programs: &mut cell_runtime::Subscriber<MachineProgram>,
+    run_client: &RunClient,
+    timeout: Duration,
+) -> anyhow::Result<SheetSummary> {
+    let client: SheetClient = node.action_client("sequence_sheet")?;
+    if !node.wait_for_action_server("sequence_sheet", timeout).await {
+        bail!(
+            "no {} server within {timeout:?}",
+            node.resolve_topic("sequence_sheet")
+        );
+    }
+    let (layout_file, layout_json) = match EMBEDDED_SHEETS
+        .iter()
+        .find(|(name, _)| *name == p.sheet_layout)
+    {
+        Some((_, json)) => (String::new(), (*json).to_owned()),
+        None => (p.sheet_layout.clone(), String::new()),
+    };
+    let goal = SequenceSheetGoal {
+        job_id: p.sheet_job_id.clone(),
+        layout_file,
+        layout_json,
+        improve: true,
+        time_budget_s: p.sheet_time_budget_s,
+        machine_profile: p.sheet_machine_profile.clone(),
+        seed: p.seed,
+        ..Default::default()
+    };
+    tracing::info!("sequencing {} ({})", p.sheet_job_id, p.sheet_layout);
+    let t0 = Instant::now();
+    let (status, sequence) = follow(&client, goal, "sequence_sheet", timeout, |f| {
+        format!(
+            "{}: iteration {}, best cost {:.1}, idle {:.0} mm, {} overheats",
+            f.phase, f.iteration, f.best_cost, f.best_idle_length_mm, f.best_overheats
+        )
+    })
+    .await?;
+    if status != GoalStatusEnum::Succeeded || !sequence.success {
+        bail!("sequence_sheet: {}", sequence.message);
+    }
+    let sequence_time = t0.elapsed();
+    tracing::info!("{}", sequence.message);
+    let program = wait_for_program(programs, p, &p.sheet_job_id, timeout).await?;
+    let t1 = Instant::now();
+    let run = execute(run_client, &program, "", timeout).await?;
+    Ok(SheetSummary {
+        sequence,
+        sequence_time,
         program,
         run,
         run_time: t1.elapsed(),
-    };
-    Ok(summary)
+    })
 }
 
 /// Runs the job, prints the summary, and returns an error unless the program ran to its end.
@@ -314,6 +470,13 @@ pub async fn run(node: CellNode, p: RunnerParams) -> anyhow::Result<()> {
     println!("{summary}");
     if !summary.run.success {
         bail!("execute_program: {}", summary.run.message);
+    }
+    if let Some(sheet) = summary.sheet.as_ref().filter(|s| !s.run.success) {
+        bail!(
+            "execute_program ({}): {}",
+            p.sheet_job_id,
+            sheet.run.message
+        );
     }
     Ok(())
 }

@@ -120,8 +120,9 @@ pub enum LayoutError {
     /// The precedence rules cannot be met (seed 003 §2).
     #[error("precedence: {0}")]
     Precedence(#[from] Violation),
-    /// A fixed pierce point is outside the sheet.
-    #[error("{ring}: pierce point ({x:.3}, {y:.3}) mm is outside the sheet")]
+    /// A fixed pierce point is outside the sheet, on the part's side of its contour, or
+    /// farther from the contour than [`PierceOptions::max_lead_in_mm`].
+    #[error("{ring}: pierce point ({x:.3}, {y:.3}) mm {reason}")]
     Pierce {
         /// Which ring.
         ring: String,
@@ -129,6 +130,8 @@ pub enum LayoutError {
         x: f64,
         /// mm.
         y: f64,
+        /// What is wrong with it.
+        reason: String,
     },
 }
 
@@ -153,6 +156,10 @@ pub struct PierceOptions {
     pub corner_angle_deg: f64,
     /// Arc-length distance kept from every corner, mm.
     pub corner_margin_mm: f64,
+    /// A fixed pierce point off its contour is reached by a straight lead-in; it may lie at
+    /// most this far from the contour, mm, and only on the scrap side (outside an outer
+    /// contour, inside a hole), so the lead-in never scars the part.
+    pub max_lead_in_mm: f64,
 }
 
 impl Default for PierceOptions {
@@ -162,6 +169,7 @@ impl Default for PierceOptions {
             spacing_mm: 50.0,
             corner_angle_deg: 30.0,
             corner_margin_mm: 2.0,
+            max_lead_in_mm: 10.0,
         }
     }
 }
@@ -380,12 +388,14 @@ impl Layout {
                 let points = dedup_ring(&ring.points, 1e-9);
                 let pierce_candidates = match ring.pierce {
                     Some(p) => {
-                        let [a, b] = self.sheet;
-                        if !(0.0..=a).contains(&p[0]) || !(0.0..=b).contains(&p[1]) {
+                        if let Err(reason) =
+                            check_fixed_pierce(p, &points, role, self.sheet, pierce)
+                        {
                             return Err(LayoutError::Pierce {
                                 ring: self.ring_name((i, hole)),
                                 x: p[0],
                                 y: p[1],
+                                reason,
                             });
                         }
                         vec![p]
@@ -506,6 +516,53 @@ pub fn precedence_from_nesting(
         predecessors,
         groups,
     }
+}
+
+/// Checks a fixed pierce point (seed 003 §A1 `P_ij`): on the sheet, within
+/// [`PierceOptions::max_lead_in_mm`] of the contour, and not on the part's side of it (the
+/// straight lead-in from the pierce to the contour, [`crate::thermal::cut_path`], would cut
+/// into the part). Returns the reason it is refused.
+fn check_fixed_pierce(
+    p: Point,
+    ring: &[Point],
+    role: ContourRole,
+    sheet: [f64; 2],
+    opt: &PierceOptions,
+) -> Result<(), String> {
+    let [a, b] = sheet;
+    if !p.iter().all(|v| v.is_finite()) {
+        return Err("is not finite".into());
+    }
+    if !(0.0..=a).contains(&p[0]) || !(0.0..=b).contains(&p[1]) {
+        return Err("is outside the sheet".into());
+    }
+    let n = ring.len();
+    let gap = (0..n)
+        .map(|k| {
+            let (s, e) = (ring[k], ring[(k + 1) % n]);
+            distance(crate::thermal::project(s, e, p), p)
+        })
+        .fold(f64::INFINITY, f64::min);
+    if gap > opt.max_lead_in_mm {
+        return Err(format!(
+            "is {gap:.3} mm from its contour; a lead-in may be at most max_lead_in_mm = {} mm",
+            opt.max_lead_in_mm
+        ));
+    }
+    // On the contour itself (within a micron) is always fine.
+    if gap > 1e-3 {
+        let inside = crate::containment::ring_contains(ring, p);
+        match role {
+            ContourRole::Outer if inside => {
+                return Err("lies inside the part; pierce an outer contour from outside".into())
+            }
+            ContourRole::Hole if !inside => {
+                return Err("lies outside the hole, in the part; pierce a hole from inside".into())
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Free pierce candidates on a closed polyline by the corner-avoiding rule of
@@ -773,6 +830,7 @@ mod tests {
             spacing_mm: 25.0,
             corner_angle_deg: 30.0,
             corner_margin_mm: 5.0,
+            ..PierceOptions::default()
         };
         let sq = rect(0.0, 0.0, 100.0, 100.0).points;
         let c = free_pierce_candidates(&sq, &opt);
@@ -798,5 +856,41 @@ mod tests {
         l.parts[2].outer.pierce = Some([300.0, 40.0]);
         let p = l.to_problem(PrecedenceMode::Strict, &opt).unwrap();
         assert_eq!(p.contours[5].pierce_candidates, vec![[300.0, 40.0]]);
+    }
+
+    #[test]
+    fn fixed_pierce_points_must_lead_in_from_scrap() {
+        let opt = PierceOptions::default();
+        let refused = |part: usize, hole: Option<usize>, at: Point| {
+            let mut l = paper_example();
+            let ring = match hole {
+                Some(h) => &mut l.parts[part].holes[h],
+                None => &mut l.parts[part].outer,
+            };
+            ring.pierce = Some(at);
+            l.to_problem(PrecedenceMode::Strict, &opt)
+                .err()
+                .map(|e| e.to_string())
+        };
+        // D3's outer is the square (300, 20)–(350, 70).
+        assert_eq!(
+            refused(2, None, [295.0, 40.0]),
+            None,
+            "5 mm lead-in from outside"
+        );
+        assert_eq!(refused(2, None, [300.0, 40.0]), None, "on the contour");
+        let e = refused(2, None, [310.0, 40.0]).unwrap();
+        assert!(e.contains("D3") && e.contains("inside the part"), "{e}");
+        let e = refused(2, None, [280.0, 40.0]).unwrap();
+        assert!(e.contains("20.000 mm from its contour"), "{e}");
+        let e = refused(2, None, [f64::NAN, 40.0]).unwrap();
+        assert!(e.contains("not finite"), "{e}");
+        // D1's second hole is (200, 20)–(240, 60): pierce it from inside.
+        assert_eq!(refused(0, Some(1), [220.0, 40.0]), None);
+        let e = refused(0, Some(1), [197.0, 40.0]).unwrap();
+        assert!(
+            e.contains("holes[1]") && e.contains("pierce a hole from inside"),
+            "{e}"
+        );
     }
 }

@@ -896,7 +896,7 @@ pub fn cut_path(contour: &Contour, pierce: Point) -> Vec<Point> {
 }
 
 /// The point of segment `a–b` nearest to `p` (`a` if the segment is degenerate).
-fn project(a: Point, b: Point, p: Point) -> Point {
+pub(crate) fn project(a: Point, b: Point, p: Point) -> Point {
     let d = [b[0] - a[0], b[1] - a[1]];
     let l2 = d[0] * d[0] + d[1] * d[1];
     if l2 == 0.0 {
