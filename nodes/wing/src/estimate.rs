@@ -145,9 +145,12 @@ mod tests {
             mv([50.0, 0.0, 0.0], 10.0),
             mv([0.0, 0.0, 0.0], 10.0),
         ];
-        assert!((build_time_s(&back, Some(a)) - (t + 0.2)).abs() < 1e-9);
-        // Short move: triangle, 1 mm at a = 100 from rest to rest: 2·sqrt(0.5/100).
-        let short = [mv([0.0; 3], 10.0), mv([1.0, 0.0, 0.0], 10.0)];
+        assert!(
+            (build_time_s(&back, Some(a)) - (t + 0.1)).abs() < 1e-9,
+            "a stop costs v/a = 0.1 s"
+        );
+        // Short move: triangle, 0.5 mm at a = 100 from rest to rest: 2·sqrt(0.5/100).
+        let short = [mv([0.0; 3], 10.0), mv([0.5, 0.0, 0.0], 10.0)];
         assert!((build_time_s(&short, Some(a)) - 2.0 * (0.005f64).sqrt()).abs() < 1e-12);
     }
 }
