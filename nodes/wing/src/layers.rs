@@ -359,3 +359,166 @@ pub fn moves(layers: &[Layer], p: &BuildParams) -> Vec<Move> {
 pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::section::split;
+    use cell_airfoil::Airfoil;
+
+    fn setup() -> (Vec<Point2<f64>>, SurfaceFunctions, Planform, SparLayout) {
+        let path = format!(
+            "{}/../../config/airfoils/ag24.dat",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let foil = Airfoil::load(path).unwrap().normalised();
+        let surf = SurfaceFunctions::new(&foil).unwrap();
+        // A tapered wing, 150 → 100 mm, 6° → 0° washout, spars at 0.1, x_τ, 0.6.
+        let n = 20;
+        let ys: Vec<f64> = (0..n).map(|j| -0.5 + (j as f64 + 0.5) / n as f64).collect();
+        let planform = Planform {
+            span_mm: 400.0,
+            chord_mm: ys.iter().map(|y| 150.0 - 100.0 * y.abs()).collect(),
+            twist_rad: ys
+                .iter()
+                .map(|y| (6.0 - 12.0 * y.abs()).to_radians())
+                .collect(),
+        };
+        let x_tau = surf.x_max_thickness();
+        let spars = SparLayout {
+            y_over_b: ys.clone(),
+            x_over_c: vec![vec![0.1, x_tau, 0.6]; n],
+            m: vec![0.0; n],
+            required_inertia_mm4: vec![0.0; n],
+            provided_inertia_mm4: vec![0.0; n],
+        };
+        (foil.points().to_vec(), surf, planform, spars)
+    }
+
+    fn params() -> BuildParams {
+        BuildParams {
+            extrusion_width_mm: 0.5,
+            layer_height_mm: 0.2,
+            first_layer_height_mm: 0.3,
+            filament_diameter_mm: 1.75,
+            perimeter_speed_mm_s: 40.0,
+            infill_speed_mm_s: 40.0,
+            solid_infill_speed_mm_s: 60.0,
+            first_layer_speed_mm_s: 30.0,
+            travel_speed_mm_s: 80.0,
+            retract_mm: 0.8,
+            retract_speed_mm_s: 35.0,
+            z_hop_mm: 0.4,
+            spar_overlap: 0.6,
+            bed_x_mm: 220.0,
+            bed_y_mm: 220.0,
+            hinge_x_over_c: 0.8,
+            hinge_z_over_t: 1.0,
+        }
+    }
+
+    /// Point-in-polygon (even-odd) in XY.
+    fn inside(poly: &[[f64; 3]], q: [f64; 3]) -> bool {
+        let mut c = false;
+        for w in poly.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            if (a[1] > q[1]) != (b[1] > q[1])
+                && q[0] < a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+            {
+                c = !c;
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn layers_follow_the_planform_and_keep_the_hinge_line_straight() {
+        let (perimeter, surf, planform, spars) = setup();
+        let p = params();
+        for section in split(400.0, 0.0, 100.0).unwrap() {
+            let layers = section_layers(&perimeter, &surf, &planform, &spars, &section, &p);
+            assert_eq!(layers.len(), ((100.0f64 - 0.3) / 0.2).ceil() as usize + 1);
+            assert!((layers[0].z_mm - 0.3).abs() < 1e-12 && layers[0].height_mm == 0.3);
+            // The hinge (x_h on the upper surface) lands on the same machine point every layer.
+            let xh = p.hinge_x_over_c;
+            let hinge: Vec<[f64; 2]> = layers
+                .iter()
+                .map(|l| {
+                    let per = &l.strokes[0];
+                    assert_eq!(per.role, Role::Perimeter);
+                    assert_eq!(per.points.first(), per.points.last(), "closed perimeter");
+                    assert!(per.points.iter().all(|q| q[2] == l.z_mm));
+                    // The upper-surface vertex nearest to x_h (Selig index i; reversed in the stroke).
+                    let i = perimeter
+                        .iter()
+                        .enumerate()
+                        .filter(|(i, _)| *i <= perimeter.len() / 2)
+                        .min_by(|a, b| (a.1.x - xh).abs().total_cmp(&(b.1.x - xh).abs()))
+                        .unwrap()
+                        .0;
+                    let q = per.points[perimeter.len() - 1 - i];
+                    [q[0], q[1]]
+                })
+                .collect();
+            // Chord 150 → 100 mm: aligned on the LE instead, x_h would move by 0.8 × 50 = 40 mm.
+            for k in 0..2 {
+                let spread = hinge
+                    .iter()
+                    .map(|h| (h[k] - hinge[0][k]).abs())
+                    .fold(0.0, f64::max);
+                assert!(spread < 2.0, "hinge coordinate {k} varies by {spread} mm");
+            }
+            for l in &layers[1..] {
+                let spar_count = l.strokes.iter().filter(|s| s.role == Role::Spar).count();
+                assert_eq!(spar_count, 3, "layer {}", l.index);
+                for s in &l.strokes[1..] {
+                    assert!(
+                        s.points.iter().all(|q| inside(&l.strokes[0].points, *q)),
+                        "spar inside the skin"
+                    );
+                    assert!(s.feed_mm_s == 40.0);
+                }
+            }
+            let rib = &layers[0].strokes[1];
+            assert_eq!(rib.role, Role::Rib);
+            assert!(rib.feed_mm_s == 30.0, "first layer speed");
+            assert!(rib
+                .points
+                .iter()
+                .all(|q| inside(&layers[0].strokes[0].points, *q)));
+            // The rib fills the section: its length × w ≈ the airfoil area.
+            let (c, _) = planform.at(layers[0].y_mm);
+            let area = Airfoil::new("a", perimeter.clone()).unwrap().signed_area() * c * c;
+            let filled = rib.length_mm() * p.extrusion_width_mm;
+            assert!(
+                (filled / area - 1.0).abs() < 0.15,
+                "rib {filled} vs area {area}"
+            );
+        }
+    }
+
+    #[test]
+    fn right_wing_is_mirrored_and_twist_raises_the_nose() {
+        let (perimeter, surf, planform, spars) = setup();
+        let p = params();
+        let secs = split(400.0, 0.0, 100.0).unwrap();
+        let right = secs.iter().find(|s| s.side == Side::Right).unwrap();
+        let left = secs.iter().find(|s| s.side == Side::Left).unwrap();
+        let rl = section_layers(&perimeter, &surf, &planform, &spars, right, &p);
+        let ll = section_layers(&perimeter, &surf, &planform, &spars, left, &p);
+        let (r, l) = (&rl[0].strokes[0].points, &ll[0].strokes[0].points);
+        let le = perimeter.len()
+            - 1
+            - perimeter
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.x.total_cmp(&b.1.x))
+                .unwrap()
+                .0;
+        // LE is at +X on the right wing, −X on the left; both are centred on the bed.
+        assert!(r[le][0] > r[0][0] && l[le][0] < l[0][0]);
+        assert!(((r[le][0] + r[0][0]) * 0.5 - 110.0).abs() < 20.0);
+        // 6° nose up at the root: the LE sits above the TE.
+        assert!(r[le][1] > r[0][1] && l[le][1] > l[0][1]);
+    }
+}

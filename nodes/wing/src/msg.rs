@@ -57,3 +57,76 @@ pub fn toolpath(layers: &[Layer], p: &BuildParams, job_id: &str) -> Toolpath {
         ..Default::default()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layers::{Role, Stroke};
+
+    #[test]
+    fn strokes_become_deposits_with_flow_and_travels_between() {
+        let p = BuildParams {
+            extrusion_width_mm: 0.5,
+            layer_height_mm: 0.2,
+            first_layer_height_mm: 0.3,
+            filament_diameter_mm: 1.75,
+            perimeter_speed_mm_s: 40.0,
+            infill_speed_mm_s: 40.0,
+            solid_infill_speed_mm_s: 60.0,
+            first_layer_speed_mm_s: 30.0,
+            travel_speed_mm_s: 80.0,
+            retract_mm: 0.8,
+            retract_speed_mm_s: 35.0,
+            z_hop_mm: 0.4,
+            spar_overlap: 0.6,
+            bed_x_mm: 220.0,
+            bed_y_mm: 220.0,
+            hinge_x_over_c: 0.8,
+            hinge_z_over_t: 1.0,
+        };
+        let stroke = |role, x: f64, z: f64, v| Stroke {
+            role,
+            points: vec![[x, 0.0, z], [x + 10.0, 0.0, z]],
+            feed_mm_s: v,
+        };
+        let layers = vec![
+            Layer {
+                index: 0,
+                z_mm: 0.3,
+                height_mm: 0.3,
+                y_mm: 0.0,
+                strokes: vec![stroke(Role::Rib, 0.0, 0.3, 30.0)],
+            },
+            Layer {
+                index: 1,
+                z_mm: 0.5,
+                height_mm: 0.2,
+                y_mm: 0.2,
+                strokes: vec![
+                    stroke(Role::Perimeter, 10.0, 0.5, 40.0),
+                    stroke(Role::Spar, 30.0, 0.5, 40.0),
+                ],
+            },
+        ];
+        let tp = toolpath(&layers, &p, "t");
+        assert_eq!(tp.process, Toolpath::PROCESS_EXTRUSION);
+        assert_eq!(tp.power_unit, Toolpath::POWER_EXTRUSION_MM3_S);
+        let kinds: Vec<u8> = tp.segments.iter().map(|s| s.kind).collect();
+        let (d, t) = (ToolpathSegment::KIND_DEPOSIT, ToolpathSegment::KIND_TRAVEL);
+        // Rib → (travel up a layer) → perimeter → (travel) → spar; the perimeter ends where
+        // the travel to the spar starts.
+        assert_eq!(kinds, vec![d, t, d, t, d]);
+        assert_eq!(
+            tp.segments.iter().map(|s| s.layer).collect::<Vec<_>>(),
+            vec![0, 1, 1, 1, 1]
+        );
+        assert_eq!(
+            tp.segments[0].power,
+            vec![0.5 * 0.3 * 30.0; 2],
+            "q = w·h·feed, first layer h₀"
+        );
+        assert_eq!(tp.segments[2].power, vec![0.5f32 * 0.2 * 40.0; 2]);
+        assert_eq!(tp.segments[1].feed_mm_s, vec![80.0; 2]);
+        assert_eq!(tp.segments[1].points[1].z, 0.5);
+    }
+}
