@@ -154,7 +154,7 @@ fn marlin_gcode_extrudes_the_deposited_volume() {
         .iter()
         .filter(|s| s.kind == ToolpathSegment::KIND_DEPOSIT)
     {
-        let h = if s.layer == 0 { 0.2 } else { 0.2 };
+        let h = layers[s.layer as usize].height_mm;
         for (q, f) in s.power.iter().zip(&s.feed_mm_s) {
             assert!(
                 (f64::from(*q) - 0.5 * h * f64::from(*f)).abs() < 1e-5,
