@@ -169,6 +169,9 @@ fn marlin_gcode_extrudes_the_deposited_volume() {
     let mut e_total = 0.0;
     let mut e_prev = 0.0;
     for line in gcode.lines() {
+        if !line.starts_with('G') {
+            continue; // comments, M-codes
+        }
         let words: Vec<&str> = line.split_whitespace().collect();
         let Some(e) = words.iter().find_map(|w| w.strip_prefix('E')) else {
             continue;
