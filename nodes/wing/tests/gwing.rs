@@ -186,6 +186,7 @@ fn marlin_gcode_extrudes_the_deposited_volume() {
         e_prev = e;
     }
     let expect = deposited_volume_mm3(&layers, 0.5) / filament_area_mm2(&p);
+    eprintln!("Marlin E {e_total:.4} mm, volume / filament area {expect:.4} mm");
     assert!(
         (e_total - expect).abs() < 0.01 * expect,
         "G-code E {e_total:.3} mm vs deposited volume / filament area {expect:.3} mm"
