@@ -30,6 +30,8 @@ use cell_msgs::Toolpath;
 use cell_profiles::MachineProfile;
 use clap::Args;
 
+use crate::exit::{bad_data, usage};
+
 /// `cell emit` options.
 #[derive(Args, Debug)]
 pub struct EmitArgs {
@@ -50,16 +52,6 @@ pub struct EmitArgs {
     /// the --out file's stem).
     #[arg(long, value_name = "ID")]
     pub job_id: Option<String>,
-}
-
-fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(cell_runtime::EXIT_USAGE)
-}
-
-fn bad_data(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(cell_runtime::EXIT_DATA)
 }
 
 /// A machine profile for `flag`, checked to take programs.

@@ -25,6 +25,8 @@ use cell_planner::{
 };
 use cell_profiles::MachineProfile;
 use clap::Args;
+
+use crate::exit::{failure, usage};
 use serde::Serialize;
 
 /// `cell hotwire` options.
@@ -160,11 +162,6 @@ pub struct TipReport {
     pub optimised: ExposureStats,
 }
 
-fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(cell_runtime::EXIT_USAGE)
-}
-
 /// The planning machine's profile name and the flag it came from: `--machine`, else
 /// `--profile`, else the default machine.
 pub fn planning_machine(a: &HotwireArgs) -> (&str, &'static str) {
@@ -247,11 +244,6 @@ pub fn trajectory_csv(plan: &HotwirePlan) -> String {
         }
     }
     out
-}
-
-fn failure(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::FAILURE
 }
 
 /// Runs `cell hotwire`.

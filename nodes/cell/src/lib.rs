@@ -16,6 +16,8 @@
 //! - `cell sheet --layout FILE.dxf|json --out DIR [--policy …]` sequences the cut of a nested
 //!   sheet on the spot (no DDS) and writes `plan.json`, `program.ngc` and `report.json` (see
 //!   [`sheet`]).
+//! - `cell wing --config FILE --out DIR` designs a G-Wing wing and writes one extrusion
+//!   program per printable section and `report.json` (see [`wing`]).
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
@@ -26,10 +28,12 @@
 pub mod bag;
 pub mod bag_rerun;
 pub mod emit;
+pub mod exit;
 pub mod hotwire;
 pub mod rrd;
 pub mod sheet;
 pub mod stream;
+pub mod wing;
 
 use std::{path::PathBuf, process::ExitCode};
 
@@ -115,6 +119,12 @@ enum Command {
     /// profile, 65 a bad layout (named file and entity or field), 1 the output cannot be
     /// written.
     Sheet(sheet::SheetArgs),
+    /// Design a wing for material extrusion (G-Wing: lifting line, spars, sections) from a spec
+    /// such as config/wings/gwing-table2.yaml and write one program per printable section
+    /// (Marlin by default) and DIR/report.json (mass, build time). Exit status: 64 bad
+    /// arguments or profile, 65 a bad spec (named file and field), 1 the output cannot be
+    /// written.
+    Wing(wing::WingArgs),
     /// Run a program file on one controller (GRBL or ABB RWS) without DDS, with a progress bar;
     /// Ctrl-C aborts with a safe stop. `--controller grbl-sim` starts the in-repo simulator.
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
@@ -180,6 +190,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Command::Hotwire(args) => hotwire::run(*args),
         Command::Emit(args) => emit::run(args),
         Command::Sheet(args) => sheet::run(args),
+        Command::Wing(args) => wing::run(args),
         Command::Stream(args) => stream::run(args),
         Command::Bag(command) => bag::run(command),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),

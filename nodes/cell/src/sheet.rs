@@ -24,6 +24,8 @@ use cell_sequencer::{
     toolpath::{to_cut_plan_msg, to_toolpath, ToolpathOptions},
 };
 use clap::Args;
+
+use crate::exit::{bad_data, failure, usage};
 use serde::Serialize;
 
 /// `cell sheet` options.
@@ -77,21 +79,6 @@ struct Report<'a> {
     simulated_time_s: f64,
     runtime_s: f64,
     phases: &'a [job::PhaseFigures],
-}
-
-fn usage(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(cell_runtime::EXIT_USAGE)
-}
-
-fn bad_data(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::from(cell_runtime::EXIT_DATA)
-}
-
-fn failure(message: impl std::fmt::Display) -> ExitCode {
-    eprintln!("error: {message}");
-    ExitCode::FAILURE
 }
 
 /// Runs `cell sheet`.

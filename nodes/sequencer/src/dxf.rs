@@ -1044,6 +1044,8 @@ mod tests {
             row_spacing: 40.0,
             ..Default::default()
         })));
+        // ELLIPSE and SPLINE exist from R13 on; the dxf crate writes R12 unless told.
+        d.header.version = dxf::enums::AcadVersion::R2000;
         let dir = tempfile::tempdir().unwrap();
         let file = dir.path().join("mixed.dxf");
         d.save_file(&file).unwrap();
@@ -1053,7 +1055,14 @@ mod tests {
             ..Default::default()
         };
         let l = read_dxf(&file, &opt).unwrap();
-        assert_eq!(l.parts.len(), 5, "one round part and four washers");
+        let mem = layout_from_drawing(&d, "mem", &opt).unwrap();
+        assert_eq!(mem.parts.len(), 5, "in memory: {:?}", ring_areas(&mem));
+        assert_eq!(
+            l.parts.len(),
+            5,
+            "one round part and four washers: {:?}",
+            ring_areas(&l)
+        );
         let areas = ring_areas(&l);
         let pi = std::f64::consts::PI;
         let close = |got: f64, want: f64, rel: f64| (got - want).abs() <= rel * want;

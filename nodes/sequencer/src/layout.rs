@@ -886,7 +886,7 @@ mod tests {
         let e = refused(2, None, [f64::NAN, 40.0]).unwrap();
         assert!(e.contains("not finite"), "{e}");
         // D1's second hole is (200, 20)–(240, 60): pierce it from inside.
-        assert_eq!(refused(0, Some(1), [220.0, 40.0]), None);
+        assert_eq!(refused(0, Some(1), [205.0, 40.0]), None);
         let e = refused(0, Some(1), [197.0, 40.0]).unwrap();
         assert!(
             e.contains("holes[1]") && e.contains("pierce a hole from inside"),
