@@ -113,7 +113,7 @@ async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
             job_id: "nest-1".into(),
             layout_file: file.display().to_string(),
             improve: true,
-            time_budget_s: 20.0,
+            time_budget_s: 4.0,
             seed: 4,
             ..Default::default()
         },

@@ -70,11 +70,14 @@ where
         .await
         .expect("stream")
         .expect("feedback");
+    // One request held open for the whole goal: the server answers only the first request it
+    // reads once the goal has ended, so a retry while the goal runs loses the answer (see
+    // `request_result`). Goals in these tests run for seconds, on a loaded machine tens.
     let (status, result) = cell_runtime::action::request_result(
         client,
         goal_id,
-        std::time::Duration::from_secs(3),
-        DELIVERY_TIMEOUT,
+        3 * DELIVERY_TIMEOUT,
+        3 * DELIVERY_TIMEOUT,
     )
     .await
     .expect("result");

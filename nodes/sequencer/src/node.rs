@@ -380,7 +380,10 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                                 node.rerun().log_heat_map("/sheet/heat", &hm);
                                 rec.disable_timeline("sim_step");
                             }
-                            heat.publish(*hm).await?;
+                            // A lost frame is not worth the goal (or the node).
+                            if let Err(e) = heat.publish(*hm).await {
+                                tracing::warn!("sequence_sheet: heat frame {step}: {e:#}");
+                            }
                         }
                     }
                 }
