@@ -28,6 +28,25 @@
 //! per move would cost a whole simulation each (measured in the bench); the proxy keeps a
 //! move's evaluation local to the moved span.
 //!
+//! **Pierce term** of the proxy: a cut `b` pierced within `(overheat_radius_cells + 1) ·
+//! cell_mm` of the polyline of one of its look-back cuts `a` costs `(w_overheat_mm +
+//! hot_penalty_mm) · proxy_weight` while `a`'s kerf is still above `t_max`, i.e. while the
+//! cutting in between (as above) is below `cell_mm · ln((t_melt − ambient)/(t_max − ambient)) /
+//! −ln(k_loss)` (a kerf at melting temperature decaying by `k_loss` per step alone; 1290 mm with
+//! the defaults). This is what moves pierce points and hole orders away from fresh kerf: on the
+//! generator's layouts most remaining overheats were pierces of small holes next to the hole
+//! cut just before (bench, 2026-11-22).
+//!
+//! **Idle budget** (thermal cost on, `idle_budget > 0`; issue 7 target "≤ 1.5× the idle length
+//! of nearest-neighbour"): the budget is `idle_budget ×` the idle length of the nearest-pierce
+//! order of the same problem ([`crate::policy::nearest_cuts`]). Every move must also keep the
+//! idle length within it, or shorten it; a start above the budget can only move towards it.
+//! The overheat/idle trade-off is thus a constrained one: the proxy weight can stay high without
+//! the idle length running away.
+//!
+//! **Cancellation**: [`improve_until`] polls a `stop` closure with the time budget; once it
+//! returns true the search ends and the best order so far is evaluated as usual.
+//!
 //! Deterministic for a seed when the time budget does not bind (`time_budget_ms = 0`).
 
 use std::time::Instant;
