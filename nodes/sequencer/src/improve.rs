@@ -475,12 +475,13 @@ impl<'e, 'p> Search<'e, 'p> {
                     0.0
                 };
                 self.seq[i].pierce = alt;
-                if self.span_cost(i, i) < before - 1e-9
-                    && (!self.capped() || {
-                        let after = self.span_idle(i, i);
-                        self.budget_ok(idle_before, after)
-                    })
-                {
+                let cheaper = self.span_cost(i, i) < before - 1e-9;
+                let after = if cheaper && self.capped() {
+                    self.span_idle(i, i)
+                } else {
+                    idle_before
+                };
+                if cheaper && (!self.capped() || self.budget_ok(idle_before, after)) {
                     improved = true;
                 } else {
                     self.seq[i].pierce = keep;
