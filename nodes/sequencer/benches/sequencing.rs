@@ -160,8 +160,11 @@ fn run_instance(name: &str, problem: &Problem) {
                 construct(&eval, policy, 1).unwrap()
             };
             let better = improve(&eval, &start, &improve_params(), |_| {}).unwrap();
-            let ms = if policy == Policy::Nearest { nn_ms } else { 0.0 }
-                + t0.elapsed().as_secs_f64() * 1e3;
+            let ms = if policy == Policy::Nearest {
+                nn_ms
+            } else {
+                0.0
+            } + t0.elapsed().as_secs_f64() * 1e3;
             let gap = if thermal {
                 None
             } else {
