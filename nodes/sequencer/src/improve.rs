@@ -28,6 +28,25 @@
 //! per move would cost a whole simulation each (measured in the bench); the proxy keeps a
 //! move's evaluation local to the moved span.
 //!
+//! **Pierce term** of the proxy: a cut `b` pierced within `(overheat_radius_cells + 1) ·
+//! cell_mm` of the polyline of one of its look-back cuts `a` costs `(w_overheat_mm +
+//! hot_penalty_mm) · proxy_weight` while `a`'s kerf is still above `t_max`, i.e. while the
+//! cutting in between (as above) is below `cell_mm · ln((t_melt − ambient)/(t_max − ambient)) /
+//! −ln(k_loss)` (a kerf at melting temperature decaying by `k_loss` per step alone; 1290 mm with
+//! the defaults). This is what moves pierce points and hole orders away from fresh kerf: on the
+//! generator's layouts most remaining overheats were pierces of small holes next to the hole
+//! cut just before (bench, 2026-11-22).
+//!
+//! **Idle budget** (thermal cost on, `idle_budget > 0`; issue 7 target "≤ 1.5× the idle length
+//! of nearest-neighbour"): the budget is `idle_budget ×` the idle length of the nearest-pierce
+//! order of the same problem ([`crate::policy::nearest_cuts`]). Every move must also keep the
+//! idle length within it, or shorten it; a start above the budget can only move towards it.
+//! The overheat/idle trade-off is thus a constrained one: the proxy weight can stay high without
+//! the idle length running away.
+//!
+//! **Cancellation**: [`improve_until`] polls a `stop` closure with the time budget; once it
+//! returns true the search ends and the best order so far is evaluated as usual.
+//!
 //! Deterministic for a seed when the time budget does not bind (`time_budget_ms = 0`).
 
 use std::time::Instant;
@@ -74,6 +93,15 @@ pub struct ImproveParams {
     pub proxy_lookback: usize,
     /// Heat proxy weight, fraction of `w_overheat_mm`. Default 1.
     pub proxy_weight: f64,
+    /// Idle budget with thermal cost on, a multiple of the nearest-neighbour idle length of
+    /// the same problem (issue 7 target: ≤ 1.5×): a move that leaves the idle length above it
+    /// is only taken if it shortens idle travel. 0 = no budget. Default 1.5.
+    #[serde(default = "default_idle_budget")]
+    pub idle_budget: f64,
+}
+
+fn default_idle_budget() -> f64 {
+    1.5
 }
 
 impl Default for ImproveParams {
@@ -90,6 +118,7 @@ impl Default for ImproveParams {
             proxy_half_life_mm: 150.0,
             proxy_lookback: 8,
             proxy_weight: 1.0,
+            idle_budget: default_idle_budget(),
         }
     }
 }
@@ -124,6 +153,12 @@ impl ImproveParams {
             "proxy_weight",
             self.proxy_weight,
             "must be finite and ≥ 0",
+        )?;
+        require(
+            self.idle_budget.is_finite() && (self.idle_budget == 0.0 || self.idle_budget >= 1.0),
+            "idle_budget",
+            self.idle_budget,
+            "must be 0 (none) or ≥ 1",
         )?;
         Ok(())
     }
@@ -184,6 +219,45 @@ fn exposure_table(
         .collect()
 }
 
+/// The proxy's pierce table (module docs): for each contour `b` and pierce candidate `k`, the
+/// contours among `b`'s neighbours whose polyline passes within `reach` mm of it.
+fn pierce_table(eval: &Evaluator, near: &[Vec<ContourId>], reach: f64) -> Vec<Vec<Vec<ContourId>>> {
+    let problem = eval.problem;
+    problem
+        .contours
+        .iter()
+        .enumerate()
+        .map(|(b, cb)| {
+            cb.pierce_candidates
+                .iter()
+                .map(|&p| {
+                    near[b]
+                        .iter()
+                        .copied()
+                        .filter(|&a| {
+                            let pts = &problem.contours[a].points;
+                            let n = pts.len();
+                            (0..n).any(|i| seg_dist(p, pts[i], pts[(i + 1) % n]) < reach)
+                        })
+                        .collect()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Distance from `p` to the segment `a–b`, mm.
+fn seg_dist(p: Point, a: Point, b: Point) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let l2 = d[0] * d[0] + d[1] * d[1];
+    let t = if l2 == 0.0 {
+        0.0
+    } else {
+        (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / l2).clamp(0.0, 1.0)
+    };
+    dist(p, [a[0] + t * d[0], a[1] + t * d[1]])
+}
+
 /// Neighbour-list length of the idle-only moves.
 const NEAR: usize = 10;
 
@@ -214,6 +288,17 @@ struct Search<'e, 'p> {
     /// overheat metric checks (pierce and segment starts) within `proxy_radius_mm` of `a`.
     exposure: Vec<Vec<(ContourId, f64)>>,
     lookback: usize,
+    /// `pierce_near[b][k]`: contours whose polyline passes within the overheat test's reach
+    /// of candidate `k` of `b` (empty without the proxy).
+    pierce_near: Vec<Vec<Vec<ContourId>>>,
+    /// Cutting after which a kerf has cooled below `t_max`, mm (module docs).
+    hot_mm: f64,
+    /// Proxy charge of a pierce next to a hot kerf: one overheat plus the hot-pierce penalty.
+    pierce_w: f64,
+    /// Current idle length, mm (kept up to date by the moves when `idle_cap` is finite).
+    idle: f64,
+    /// Idle budget, mm (`ImproveParams::idle_budget`; infinite without one).
+    idle_cap: f64,
 }
 
 impl<'e, 'p> Search<'e, 'p> {
@@ -227,11 +312,23 @@ impl<'e, 'p> Search<'e, 'p> {
 
     /// Heat-proxy term between contour `a`, cut `gap_mm` of cutting before `b` starts, and
     /// `b` (module docs): exposure × weight × ½^(gap / half-life).
-    fn proxy_pair(&self, a: ContourId, b: ContourId, gap_mm: f64) -> f64 {
-        match self.exposure[b].iter().find(|&&(x, _)| x == a) {
+    fn proxy_pair(&self, a: ContourId, b: Cut, gap_mm: f64) -> f64 {
+        let body = match self.exposure[b.contour].iter().find(|&&(x, _)| x == a) {
             Some(&(_, e)) => self.proxy_w * e * (-gap_mm * self.decay_per_mm).exp(),
             None => 0.0,
-        }
+        };
+        // The pierce term (module docs): a pierce next to a kerf still above `t_max`.
+        let pierce = if gap_mm < self.hot_mm
+            && self
+                .pierce_near
+                .get(b.contour)
+                .is_some_and(|k| k[b.pierce].contains(&a))
+        {
+            self.pierce_w
+        } else {
+            0.0
+        };
+        body + pierce
     }
 
     /// Cutting (plus dwell) between the middle of contour `c`'s cut and its end, mm.
@@ -252,7 +349,7 @@ impl<'e, 'p> Search<'e, 'p> {
                 let mut gap = 0.0;
                 for m in 1..=self.lookback.min(i) {
                     let j = self.seq[i - m].contour;
-                    t += self.proxy_pair(j, c.contour, gap + self.half(j));
+                    t += self.proxy_pair(j, c, gap + self.half(j));
                     gap += self.cut_len[j];
                 }
             }
@@ -268,6 +365,33 @@ impl<'e, 'p> Search<'e, 'p> {
 
     fn total(&self) -> f64 {
         (0..=self.seq.len()).map(|i| self.term(i)).sum()
+    }
+
+    /// Idle length of the edges into positions `lo..=hi + 1` (`n`: the return to start), mm.
+    fn span_idle(&self, lo: usize, hi: usize) -> f64 {
+        let end = (hi + 1).min(self.seq.len());
+        (lo..=end)
+            .map(|i| {
+                let prev = if i == 0 { usize::MAX } else { i - 1 };
+                dist(self.point(prev), self.point(i))
+            })
+            .sum()
+    }
+
+    /// Whether a change of the idle length from `self.idle` by `before → after` (over a span)
+    /// keeps the idle budget: within it, or shorter than before. Updates `self.idle` if so.
+    fn budget_ok(&mut self, before: f64, after: f64) -> bool {
+        let new = self.idle - before + after;
+        if new <= self.idle_cap || after <= before {
+            self.idle = new;
+            true
+        } else {
+            false
+        }
+    }
+
+    fn capped(&self) -> bool {
+        self.idle_cap.is_finite()
     }
 
     fn reindex(&mut self, lo: usize, hi: usize) {
@@ -308,10 +432,21 @@ impl<'e, 'p> Search<'e, 'p> {
         undo: &dyn Fn(&mut [Cut]),
     ) -> bool {
         let before = self.span_cost(lo, hi);
+        let idle_before = if self.capped() {
+            self.span_idle(lo, hi)
+        } else {
+            0.0
+        };
         apply(&mut self.seq[lo..=hi]);
         self.reindex(lo, hi);
         if self.feasible_span(lo, hi) && self.span_cost(lo, hi) < before - 1e-9 {
-            return true;
+            if !self.capped() {
+                return true;
+            }
+            let after = self.span_idle(lo, hi);
+            if self.budget_ok(idle_before, after) {
+                return true;
+            }
         }
         undo(&mut self.seq[lo..=hi]);
         self.reindex(lo, hi);
@@ -334,8 +469,19 @@ impl<'e, 'p> Search<'e, 'p> {
                 }
                 let keep = self.seq[i].pierce;
                 let before = self.span_cost(i, i);
+                let idle_before = if self.capped() {
+                    self.span_idle(i, i)
+                } else {
+                    0.0
+                };
                 self.seq[i].pierce = alt;
-                if self.span_cost(i, i) < before - 1e-9 {
+                let cheaper = self.span_cost(i, i) < before - 1e-9;
+                let after = if cheaper && self.capped() {
+                    self.span_idle(i, i)
+                } else {
+                    idle_before
+                };
+                if cheaper && (!self.capped() || self.budget_ok(idle_before, after)) {
                     improved = true;
                 } else {
                     self.seq[i].pierce = keep;
@@ -383,6 +529,9 @@ impl<'e, 'p> Search<'e, 'p> {
     }
 
     fn local_search(&mut self, params: &ImproveParams, deadline: &dyn Fn() -> bool) {
+        if deadline() {
+            return;
+        }
         if self.proxy_w == 0.0 {
             // Idle cost only: neighbour-list moves with O(1) deltas, to a local optimum.
             for _ in 0..params.local_sweeps * 8 {
@@ -391,6 +540,7 @@ impl<'e, 'p> Search<'e, 'p> {
                 }
             }
         }
+        self.idle = self.span_idle(0, self.seq.len().saturating_sub(1));
         for _ in 0..params.local_sweeps {
             if !self.sweep(params) || deadline() {
                 break;
@@ -638,14 +788,14 @@ impl<'e, 'p> Search<'e, 'p> {
                         let mut gap = 0.0;
                         for mm in 1..=self.lookback.min(q) {
                             let j = self.seq[q - mm].contour;
-                            d += self.proxy_pair(j, c, gap + self.half(j));
+                            d += self.proxy_pair(j, cut, gap + self.half(j));
                             gap += self.cut_len[j];
                         }
                         let mut gap = self.half(c);
                         for mm in 1..=self.lookback.min(self.seq.len() - q) {
-                            let j = self.seq[q + mm - 1].contour;
+                            let j = self.seq[q + mm - 1];
                             d += self.proxy_pair(c, j, gap);
-                            gap += self.cut_len[j];
+                            gap += self.cut_len[j.contour];
                         }
                     }
                     if best.is_none_or(|b| d < b.0) {
@@ -689,7 +839,23 @@ pub fn improve(
     eval: &Evaluator,
     start: &CutPlan,
     params: &ImproveParams,
+    feedback: impl FnMut(Progress),
+) -> Result<CutPlan, ParamError> {
+    improve_until(eval, start, params, feedback, &|| false)
+}
+
+/// As [`improve`], stopping early once `stop` returns true (polled between moves and LNS
+/// iterations, e.g. an action's cancel flag): the search ends, and the best order so far gets
+/// its true evaluation (still never worse than `start`).
+///
+/// # Errors
+/// As [`improve`].
+pub fn improve_until(
+    eval: &Evaluator,
+    start: &CutPlan,
+    params: &ImproveParams,
     mut feedback: impl FnMut(Progress),
+    stop: &dyn Fn() -> bool,
 ) -> Result<CutPlan, ParamError> {
     params.validate()?;
     let problem = eval.problem;
@@ -711,7 +877,7 @@ pub fn improve(
     }
     let t0 = Instant::now();
     let budget = params.time_budget_ms;
-    let deadline = || budget > 0 && t0.elapsed().as_millis() as u64 >= budget;
+    let deadline = || stop() || (budget > 0 && t0.elapsed().as_millis() as u64 >= budget);
     let mut successors = vec![Vec::new(); n];
     for (c, preds) in problem.precedence.predecessors.iter().enumerate() {
         for &p in preds {
@@ -756,13 +922,27 @@ pub fn improve(
         .map(|c| nearest_to(centre(&bbox[c]), Some(c), NEAR))
         .collect();
     let near_start = nearest_to(problem.start, None, NEAR);
-    let exposure = if eval.cost_params().thermal {
+    let (exposure, pierce_near) = if eval.cost_params().thermal {
         let wide: Vec<Vec<ContourId>> = (0..n)
             .map(|c| nearest_to(centre(&bbox[c]), Some(c), 2 * NEAR))
             .collect();
-        exposure_table(eval, &wide, params.proxy_radius_mm)
+        let tp = eval.thermal_params();
+        let reach = (tp.overheat_radius_cells as f64 + 1.0) * tp.cell_mm;
+        (
+            exposure_table(eval, &wide, params.proxy_radius_mm),
+            pierce_table(eval, &wide, reach),
+        )
     } else {
-        vec![Vec::new(); n]
+        (vec![Vec::new(); n], Vec::new())
+    };
+    let tp = eval.thermal_params();
+    // Steps for a kerf at t_melt to decay below t_max by k_loss alone, as mm of cutting.
+    let hot_mm = if tp.k_loss < 1.0 {
+        f64::from((tp.t_melt_c - tp.ambient_c) / (tp.t_max_c - tp.ambient_c)).ln()
+            / -f64::from(tp.k_loss).ln()
+            * tp.cell_mm
+    } else {
+        f64::INFINITY
     };
     let mut s = Search {
         near,
@@ -788,8 +968,20 @@ pub fn improve(
         decay_per_mm: std::f64::consts::LN_2 / params.proxy_half_life_mm,
         exposure,
         lookback: params.proxy_lookback,
+        idle: 0.0,
+        idle_cap: f64::INFINITY,
+        pierce_near,
+        hot_mm,
+        pierce_w: (eval.cost_params().w_overheat_mm + eval.cost_params().hot_penalty_mm)
+            * params.proxy_weight,
     };
     s.reindex(0, n - 1);
+    s.idle = s.span_idle(0, n - 1);
+    if eval.cost_params().thermal && params.idle_budget > 0.0 {
+        if let Ok(nn) = crate::policy::nearest_cuts(eval) {
+            s.idle_cap = params.idle_budget * crate::plan::idle_length(problem, &nn);
+        }
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     s.local_search(params, &deadline);
     let mut cur = s.total();
@@ -809,8 +1001,10 @@ pub fn improve(
                 }
             }
             let cost = s.total();
-            if cost <= cur + 1e-9 {
+            let idle = s.span_idle(0, n - 1);
+            if cost <= cur + 1e-9 && (idle <= s.idle_cap || idle <= s.idle) {
                 cur = cost;
+                s.idle = idle;
                 if cost < best.0 - 1e-9 {
                     best = (cost, s.seq.clone());
                 }

@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
 use crate::dxf::{read_layout, DxfError, DxfOptions};
-use crate::improve::{improve, ImproveParams, Progress};
+use crate::improve::{improve_until, ImproveParams, Progress};
 use crate::layout::{Layout, LayoutError, PierceOptions};
 use crate::plan::CutPlan;
 use crate::policy::{construct, Policy};
@@ -280,9 +280,24 @@ pub fn load_problem(job: &SheetJob) -> Result<Problem, JobError> {
 /// field), or rules that cannot be met.
 pub fn run(
     job: &SheetJob,
+    progress: impl FnMut(JobProgress),
+    frame_every: u64,
+    frame: &mut dyn FnMut(&Frame),
+) -> Result<SheetOutcome, JobError> {
+    run_until(job, progress, frame_every, frame, &|| false)
+}
+
+/// As [`run`], with a cancel hook: once `stop` returns true the improvement phase ends early
+/// ([`crate::improve::improve_until`]) and the job finishes with the best plan so far.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_until(
+    job: &SheetJob,
     mut progress: impl FnMut(JobProgress),
     frame_every: u64,
     frame: &mut dyn FnMut(&Frame),
+    stop: &dyn Fn() -> bool,
 ) -> Result<SheetOutcome, JobError> {
     let t0 = Instant::now();
     let mut phases = Vec::new();
@@ -319,13 +334,19 @@ pub fn run(
         let t = Instant::now();
         let start = report(Phase::Improvement, &constructed);
         progress(start);
-        let improved = improve(&eval, &constructed, &params, |p: Progress| {
-            progress(JobProgress {
-                iteration: p.iteration,
-                best_cost: p.best_cost,
-                ..start
-            })
-        })?;
+        let improved = improve_until(
+            &eval,
+            &constructed,
+            &params,
+            |p: Progress| {
+                progress(JobProgress {
+                    iteration: p.iteration,
+                    best_cost: p.best_cost,
+                    ..start
+                })
+            },
+            stop,
+        )?;
         phases.push(figures(Phase::Improvement, t, &improved));
         improved
     } else {

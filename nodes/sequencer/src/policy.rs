@@ -104,6 +104,33 @@ fn samples(eval: &Evaluator) -> Vec<Vec<Point>> {
 /// # Errors
 /// [`Violation::Cycle`] if the rules leave contours that can never be cut.
 pub fn construct(eval: &Evaluator, policy: Policy, seed: u64) -> Result<CutPlan, Violation> {
+    let (cuts, sim) = build(eval, policy, seed)?;
+    // The thermal policies drove the raster through exactly these cuts: reuse the run.
+    Ok(match sim {
+        Some(s) if eval.cost_params().thermal => {
+            let out = s.finish(eval.problem.start);
+            eval.assemble(&cuts, Some(&out))
+        }
+        _ => eval.evaluate(&cuts),
+    })
+}
+
+/// The nearest-pierce order alone (seed 003 §A4 "shortest path"), without the raster run of
+/// its evaluation: the reference of the improvement's idle budget.
+///
+/// # Errors
+/// [`Violation::Cycle`] if the rules leave contours that can never be cut.
+pub fn nearest_cuts(eval: &Evaluator) -> Result<Vec<Cut>, Violation> {
+    build(eval, Policy::Nearest, 0).map(|(cuts, _)| cuts)
+}
+
+/// The greedy loop (seed 003 §A4 `Main`): the cuts, and the raster the thermal policies drove
+/// through them.
+fn build(
+    eval: &Evaluator,
+    policy: Policy,
+    seed: u64,
+) -> Result<(Vec<Cut>, Option<ThermalSim<'static>>), Violation> {
     let problem = eval.problem;
     let rules = &problem.precedence;
     let mut frontier = Frontier::new(rules);
@@ -211,14 +238,7 @@ pub fn construct(eval: &Evaluator, policy: Policy, seed: u64) -> Result<CutPlan,
         let stuck = (0..rules.len()).filter(|&c| !frontier.is_cut(c)).collect();
         return Err(Violation::Cycle(stuck));
     }
-    // The thermal policies drove the raster through exactly these cuts: reuse the run.
-    Ok(match sim {
-        Some(s) if eval.cost_params().thermal => {
-            let out = s.finish(problem.start);
-            eval.assemble(&cuts, Some(&out))
-        }
-        _ => eval.evaluate(&cuts),
-    })
+    Ok((cuts, sim))
 }
 
 #[cfg(test)]
