@@ -15,6 +15,9 @@
 //! - `cell sheet --layout FILE.dxf|json --out DIR [--policy …]` sequences the cut of a nested
 //!   sheet on the spot (no DDS) and writes `plan.json`, `program.ngc` and `report.json` (see
 //!   [`sheet`]).
+//! - `cell slice --stl FILE --process waam|FILE.yaml --out DIR [--layer-height MM]` slices a
+//!   part for WAAM on the spot (no DDS) and writes `layers.json`, the RAPID program,
+//!   `report.json` and `stock.stl` (see [`slice`]).
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
@@ -28,6 +31,7 @@ pub mod emit;
 pub mod hotwire;
 pub mod rrd;
 pub mod sheet;
+pub mod slice;
 pub mod stream;
 
 use std::{path::PathBuf, process::ExitCode};
@@ -49,6 +53,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("monitor", cell_monitor::main),
     ("planner", cell_planner::node::main),
     ("sequencer", cell_sequencer::node::main),
+    ("slicer", cell_slicer::node::main),
     ("emitter", cell_emitter::node::main),
     ("machine_bridge", cell_bridge::node::main),
     ("job_runner", cell_runner::main),
@@ -113,6 +118,12 @@ enum Command {
     /// profile, 65 a bad layout (named file and entity or field), 1 the output cannot be
     /// written.
     Sheet(sheet::SheetArgs),
+    /// Slice a part (STL) for wire-arc additive manufacturing without DDS, with a progress bar
+    /// per layer: write DIR/layers.json, the RAPID program (DIR/WAAM_<job>.mod and .pgf),
+    /// DIR/report.json (layers, contours, deposited volume, times, cost breakdown) and
+    /// DIR/stock.stl. Exit status: 64 bad arguments or profile, 65 a bad mesh or process file
+    /// (named), 1 the output cannot be written.
+    Slice(slice::SliceArgs),
     /// Run a program file on one controller (GRBL or ABB RWS) without DDS, with a progress bar;
     /// Ctrl-C aborts with a safe stop. `--controller grbl-sim` starts the in-repo simulator.
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
@@ -178,6 +189,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Command::Hotwire(args) => hotwire::run(*args),
         Command::Emit(args) => emit::run(args),
         Command::Sheet(args) => sheet::run(args),
+        Command::Slice(args) => slice::run(args),
         Command::Stream(args) => stream::run(args),
         Command::Bag(command) => bag::run(command),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
