@@ -545,6 +545,17 @@ fn build_report(
         removed_m3: (bbox_m3 - finished_m3).max(0.0),
     };
     let cost = post_toolpath_cost(rates, &volumes, &totals);
+    let mut warnings = warnings;
+    if totals.deposited_m3 < finished_m3 {
+        // Eq. 6 then removes a negative mass: the machining terms come out negative.
+        warnings.push(format!(
+            "{name}: deposited volume {:.0} mm³ is below the part's {:.0} mm³: the beads do \
+             not cover the part (machining cost {:.2} SEK is not meaningful)",
+            totals.deposited_m3 * 1e9,
+            mesh.volume_mm3,
+            cost.machining_sek
+        ));
+    }
     let solid_machining = solid_machining_cost(rates, &volumes);
     let widths = layers
         .iter()
