@@ -457,6 +457,13 @@ pub fn run(
         ));
     }
     let total = stack.layers.len();
+    if total == 0 {
+        warnings.push(format!(
+            "{name}: no layer: the part is {:.3} mm high, less than half a layer ({h} mm); STL \
+             coordinates are taken as mm",
+            hi[2] - lo[2]
+        ));
+    }
     progress(JobProgress {
         phase: Phase::Plan,
         layers_done: 0,
@@ -565,10 +572,12 @@ fn build_report(
         .map(|p| p.bead_width_mm)
         .filter(|w| *w > 0.0);
     let (wmin, wmax) = widths.fold((f64::INFINITY, 0.0f64), |(a, b), w| (a.min(w), b.max(w)));
-    let deposition_time_s = totals.deposition_s;
-    let travel_time_s = totals.travel.seconds();
-    let dwell_time_s = totals.wait_s;
-    let deposited_volume_mm3: f64 = layers.iter().map(|l| l.deposited_volume_mm3).sum();
+    let deposition_time_s = totals.deposition_s + 0.0;
+    let travel_time_s = totals.travel.seconds() + 0.0;
+    let dwell_time_s = totals.wait_s + 0.0;
+    // `+ 0.0`: an empty f64 sum is −0.0, which reports would print as "-0".
+    let deposited_volume_mm3: f64 =
+        layers.iter().map(|l| l.deposited_volume_mm3).sum::<f64>() + 0.0;
     SliceReport {
         source: name.into(),
         process: job.process_name.clone(),
