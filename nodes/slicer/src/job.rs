@@ -354,11 +354,10 @@ impl SliceOutcome {
     pub fn rows_csv(&self) -> Vec<u8> {
         let mut rows = Vec::new();
         for l in &self.layers {
+            // Every path ends with its break row, which carries the path's k.
             let next_k = rows
-                .iter()
-                .map(|r: &cell_waam::rows::ThesisRow| r.k + 1)
-                .max()
-                .unwrap_or(0);
+                .last()
+                .map_or(0, |r: &cell_waam::rows::ThesisRow| r.k + 1);
             rows.extend(cell_waam::rows::rows_from_layer(
                 l,
                 next_k,
