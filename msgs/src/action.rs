@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{CutPlan, MachineProgram, Toolpath};
+use crate::{CutPlan, LayerStack, MachineProgram, Toolpath};
 
 /// Goal of `PlanHotwire`: plan a hot-wire cut of a (possibly tapered) wing panel (Swarm-Cut
 /// exposure-optimised trajectory with the kerf model).
@@ -180,4 +180,51 @@ pub struct SequenceSheetFeedback {
     pub best_idle_length_mm: f64,
     /// Its overheats.
     pub best_overheats: u32,
+}
+
+/// Goal of `Slice`: slice a part for wire-arc additive manufacturing (seed 004): mesh → layer
+/// contours → bead toolpath, with the deposited volume, times and cost.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SliceGoal {
+    /// Job identifier, carried into the LayerStack and the Toolpath.
+    pub job_id: String,
+    /// The part as an STL file (ASCII or binary, mm). Exactly one of `stl_file` and
+    /// `wing_spec_file`.
+    pub stl_file: String,
+    /// A wing spec (cell_wing YAML); not built yet: such goals end with `success = false`.
+    pub wing_spec_file: String,
+    /// WAAM process profile (YAML, cell_waam format); empty = the built-in
+    /// `config/processes/waam.yaml`.
+    pub process_file: String,
+    /// Layer height \[mm\]; 0 = the process profile's.
+    pub layer_height_mm: f64,
+    /// Machine profile under config/machines (or a YAML path); empty = the slicer's default.
+    pub machine_profile: String,
+}
+
+/// Result of `Slice`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SliceResult {
+    /// Whether slicing succeeded.
+    pub success: bool,
+    /// Why it failed (naming the file and field), or a one-line summary on success.
+    pub message: String,
+    /// The layer contours.
+    pub layer_stack: LayerStack,
+    /// Deposit and travel segments, for the emitter.
+    pub toolpath: Toolpath,
+    /// The report as JSON: layers, contours, deposited volume, times, cost breakdown, mesh
+    /// report.
+    pub report_json: String,
+}
+
+/// Feedback of `Slice`.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SliceFeedback {
+    /// `load`, `slice`, `plan` (per layer) or `done`.
+    pub phase: String,
+    /// Layers planned so far.
+    pub layers_done: u32,
+    /// Layers in the stack.
+    pub layers_total: u32,
 }

@@ -27,12 +27,12 @@ mod srv;
 pub use action::{
     ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, PlanHotwireFeedback,
     PlanHotwireGoal, PlanHotwireResult, SequenceSheetFeedback, SequenceSheetGoal,
-    SequenceSheetResult,
+    SequenceSheetResult, SliceFeedback, SliceGoal, SliceResult,
 };
 pub use cdr::{from_cdr, to_cdr, CdrError};
 pub use msg::{
-    CutPlan, HeatMap, HeatMapSizeError, MachineCommand, MachineProgram, MachineStatus, ProgramFile,
-    Toolpath, ToolpathSegment,
+    CutPlan, HeatMap, HeatMapSizeError, LayerStack, MachineCommand, MachineProgram, MachineStatus,
+    Polygon2, ProgramFile, SliceLayer, Toolpath, ToolpathSegment,
 };
 pub use srv::{
     EmitProgramRequest, EmitProgramResponse, SendMachineCommandRequest, SendMachineCommandResponse,
@@ -133,6 +133,9 @@ macro_rules! for_each_message {
             $crate::MachineStatus => "cell_msgs/msg/MachineStatus",
             $crate::MachineCommand => "cell_msgs/msg/MachineCommand",
             $crate::CutPlan => "cell_msgs/msg/CutPlan",
+            $crate::Polygon2 => "cell_msgs/msg/Polygon2",
+            $crate::SliceLayer => "cell_msgs/msg/SliceLayer",
+            $crate::LayerStack => "cell_msgs/msg/LayerStack",
             $crate::EmitProgramRequest => "cell_msgs/srv/EmitProgram_Request",
             $crate::EmitProgramResponse => "cell_msgs/srv/EmitProgram_Response",
             $crate::SendMachineCommandRequest => "cell_msgs/srv/SendMachineCommand_Request",
@@ -146,6 +149,9 @@ macro_rules! for_each_message {
             $crate::SequenceSheetGoal => "cell_msgs/action/SequenceSheet_Goal",
             $crate::SequenceSheetResult => "cell_msgs/action/SequenceSheet_Result",
             $crate::SequenceSheetFeedback => "cell_msgs/action/SequenceSheet_Feedback",
+            $crate::SliceGoal => "cell_msgs/action/Slice_Goal",
+            $crate::SliceResult => "cell_msgs/action/Slice_Result",
+            $crate::SliceFeedback => "cell_msgs/action/Slice_Feedback",
         }
     };
 }

@@ -446,3 +446,45 @@ pub struct CutPlan {
     /// The objective: idle length + w · overheats + lead-in penalties.
     pub cost: f64,
 }
+
+/// One closed planar polygon of a slice, in the layer's plane (z from the parent
+/// [`SliceLayer`]). Units: millimetres. Vertices in order, the last not repeating the first;
+/// outer contours run counter-clockwise, holes clockwise.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct Polygon2 {
+    /// Vertex x coordinates (one per vertex).
+    pub x_mm: Vec<f64>,
+    /// Vertex y coordinates (same length as `x_mm`).
+    pub y_mm: Vec<f64>,
+    /// True for a hole (odd nesting depth).
+    pub is_hole: bool,
+}
+
+/// One layer of a sliced part: the closed contours the plane `z = z_mm` cuts from the mesh.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct SliceLayer {
+    /// Layer number from the bottom (0-based).
+    pub index: u32,
+    /// Height of the slicing plane (and of the layer's toolpath) \[mm\].
+    pub z_mm: f64,
+    /// Closed contours: outer contours and holes.
+    pub contours: Vec<Polygon2>,
+    /// Chains the slicer could not close (an open mesh); they are not in `contours`.
+    pub open_chains: u32,
+}
+
+/// The layers a part was sliced into (seed 004): what the slicer's `Slice` action returns
+/// beside the [`Toolpath`] and publishes on `layer_stack`. Units: millimetres.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct LayerStack {
+    /// Frame and time of the stack.
+    pub header: Header,
+    /// Job this stack belongs to; carried into the Toolpath.
+    pub job_id: String,
+    /// Distance between consecutive slicing planes \[mm\].
+    pub layer_height_mm: f64,
+    /// Height of the first plane \[mm\].
+    pub first_z_mm: f64,
+    /// The layers, bottom to top.
+    pub layers: Vec<SliceLayer>,
+}

@@ -119,6 +119,21 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../msg/CutPlan.msg"),
     ),
     (
+        "cell_msgs/msg/Polygon2",
+        Kind::Msg,
+        include_str!("../msg/Polygon2.msg"),
+    ),
+    (
+        "cell_msgs/msg/SliceLayer",
+        Kind::Msg,
+        include_str!("../msg/SliceLayer.msg"),
+    ),
+    (
+        "cell_msgs/msg/LayerStack",
+        Kind::Msg,
+        include_str!("../msg/LayerStack.msg"),
+    ),
+    (
         "cell_msgs/srv/EmitProgram",
         Kind::Srv,
         include_str!("../srv/EmitProgram.srv"),
@@ -142,6 +157,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         "cell_msgs/action/SequenceSheet",
         Kind::Action,
         include_str!("../action/SequenceSheet.action"),
+    ),
+    (
+        "cell_msgs/action/Slice",
+        Kind::Action,
+        include_str!("../action/Slice.action"),
     ),
 ];
 
@@ -238,7 +258,7 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        assert_eq!(names.len(), 15 + 3 * 2 + 3 * 3);
+        assert_eq!(names.len(), 18 + 3 * 2 + 4 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));

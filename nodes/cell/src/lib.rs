@@ -18,6 +18,9 @@
 //!   [`sheet`]).
 //! - `cell wing --config FILE --out DIR` designs a G-Wing wing and writes one extrusion
 //!   program per printable section and `report.json` (see [`wing`]).
+//! - `cell slice --stl FILE --process waam|FILE.yaml --out DIR [--layer-height MM]` slices a
+//!   part for WAAM on the spot (no DDS) and writes `layers.json`, the RAPID program,
+//!   `report.json` and `stock.stl` (see [`slice`]).
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
@@ -32,6 +35,7 @@ pub mod exit;
 pub mod hotwire;
 pub mod rrd;
 pub mod sheet;
+pub mod slice;
 pub mod stream;
 pub mod wing;
 
@@ -54,6 +58,7 @@ pub const BUILTIN_NODES: &[(&str, BuiltinMain)] = &[
     ("monitor", cell_monitor::main),
     ("planner", cell_planner::node::main),
     ("sequencer", cell_sequencer::node::main),
+    ("slicer", cell_slicer::node::main),
     ("emitter", cell_emitter::node::main),
     ("machine_bridge", cell_bridge::node::main),
     ("job_runner", cell_runner::main),
@@ -125,6 +130,12 @@ enum Command {
     /// arguments or profile, 65 a bad spec (named file and field), 1 the output cannot be
     /// written.
     Wing(wing::WingArgs),
+    /// Slice a part (STL) for wire-arc additive manufacturing without DDS, with a progress bar
+    /// per layer: write DIR/layers.json, the RAPID program (DIR/WAAM_<job>.mod and .pgf),
+    /// DIR/report.json (layers, contours, deposited volume, times, cost breakdown) and
+    /// DIR/stock.stl. Exit status: 64 bad arguments or profile, 65 a bad mesh or process file
+    /// (named), 1 the output cannot be written.
+    Slice(slice::SliceArgs),
     /// Run a program file on one controller (GRBL or ABB RWS) without DDS, with a progress bar;
     /// Ctrl-C aborts with a safe stop. `--controller grbl-sim` starts the in-repo simulator.
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
@@ -191,6 +202,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Command::Emit(args) => emit::run(args),
         Command::Sheet(args) => sheet::run(args),
         Command::Wing(args) => wing::run(args),
+        Command::Slice(args) => slice::run(args),
         Command::Stream(args) => stream::run(args),
         Command::Bag(command) => bag::run(command),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
