@@ -797,11 +797,11 @@ fn flatten_spline(sp: &dxf::entities::Spline, chord_tol_mm: f64) -> Result<Vec<P
             sp.weight_values.len()
         ));
     }
-    if knots.windows(2).any(|w| !(w[1] >= w[0])) || knots.iter().any(|k| !k.is_finite()) {
+    if knots.iter().any(|k| !k.is_finite()) || knots.windows(2).any(|w| w[1] < w[0]) {
         return Err("invalid SPLINE: knots must be finite and non-decreasing".into());
     }
     let weight = |i: usize| sp.weight_values.get(i).copied().unwrap_or(1.0);
-    if (0..n).any(|i| !(weight(i) > 0.0) || !weight(i).is_finite()) {
+    if (0..n).any(|i| !weight(i).is_finite() || weight(i) <= 0.0) {
         return Err("invalid SPLINE: weights must be positive and finite".into());
     }
     // Homogeneous control points (w·x, w·y, w).
@@ -826,8 +826,9 @@ fn flatten_spline(sp: &dxf::entities::Spline, chord_tol_mm: f64) -> Result<Vec<P
                 } else {
                     0.0
                 };
-                for c in 0..3 {
-                    d[j][c] = (1.0 - alpha) * d[j - 1][c] + alpha * d[j][c];
+                let prev = d[j - 1];
+                for (c, v) in d[j].iter_mut().enumerate() {
+                    *v = (1.0 - alpha) * prev[c] + alpha * *v;
                 }
             }
         }
