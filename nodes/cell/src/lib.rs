@@ -20,7 +20,7 @@
 //!   program per printable section and `report.json` (see [`wing`]).
 //! - `cell slice --stl FILE --process waam|FILE.yaml --out DIR [--layer-height MM]` slices a
 //!   part for WAAM on the spot (no DDS) and writes `layers.json`, the RAPID program,
-//!   `report.json` and `stock.stl` (see [`slice`]).
+//!   `report.json` and `stock.stl` (see [`mod@slice`]).
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
