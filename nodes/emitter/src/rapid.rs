@@ -550,6 +550,18 @@ fn moves(
             keep[i] = false;
         }
     }
+    // A travel whose every point was dropped (a two-point travel from a weld end straight to
+    // the next weld start) still switches the process off: the kept move after it starts a
+    // new run, approached at that travel's speed.
+    let mut travel_before: Vec<Option<String>> = Vec::with_capacity(out.len());
+    let mut dropped_travel: Option<String> = None;
+    for (m, &kept) in out.iter().zip(&keep) {
+        if kept {
+            travel_before.push(dropped_travel.take());
+        } else if !m.welded {
+            dropped_travel = Some(m.speed.clone());
+        }
+    }
     let mut flags = keep.iter();
     out.retain(|_| *flags.next().unwrap_or(&true));
     let mut flags = keep.iter();
@@ -559,15 +571,17 @@ fn moves(
         if !out[i].welded {
             continue;
         }
-        let start = i == 0 || !out[i - 1].welded;
-        let end = i + 1 == len || !out[i + 1].welded;
+        let start = i == 0 || !out[i - 1].welded || travel_before[i].is_some();
+        let end = i + 1 == len || !out[i + 1].welded || travel_before[i + 1].is_some();
         if start && end {
             let (segment, point) = at[i];
             return Err(EmitError::ShortRun { segment, point });
         }
         out[i].run_start = start;
         out[i].run_end = end;
-        if start && i > 0 {
+        if let Some(speed) = travel_before[i].take() {
+            out[i].speed = speed;
+        } else if start && i > 0 {
             // The move to a weld start is the approach, before the process starts: it runs at
             // the travel speed it comes from, not the bead speed.
             out[i].speed = out[i - 1].speed.clone();

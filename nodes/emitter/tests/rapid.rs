@@ -399,6 +399,72 @@ fn arc_mode_maps_runs_to_arclstart_arcl_arclend_with_fine_ends() {
     }
 }
 
+/// A WAAM layer without a lift: a two-point travel runs from one bead's end straight to the
+/// next bead's start, so both its points coincide with weld points and are dropped. The arc
+/// must still go off between the beads (it once ran on across the travel).
+#[test]
+fn a_travel_without_lift_still_splits_the_weld_runs() {
+    let p = profile("abb-irb2600-waam");
+    // Two beads at x0..x0 + 100, joined by a travel at bead height.
+    let path = |x0: f64| {
+        let bead = |y: f64| {
+            with_normals(
+                seg(DEPOSIT, &[(x0, y, 200.0), (x0 + 100.0, y, 200.0)], 8.0),
+                (0.0, 0.0, 1.0),
+            )
+        };
+        toolpath(vec![
+            seg(TRAVEL, &[(x0, 50.0, 250.0), (x0, 100.0, 200.0)], 100.0),
+            bead(100.0),
+            seg(
+                TRAVEL,
+                &[(x0 + 100.0, 100.0, 200.0), (x0, 120.0, 200.0)],
+                100.0,
+            ),
+            bead(120.0),
+        ])
+    };
+    let tp = path(100.0);
+    let files = rapid::emit(&tp, &p, "w").unwrap();
+    let s = check(&files, &p);
+    assert_eq!(s.count("ArcLStart"), 2, "{}", files[0].text);
+    assert_eq!(s.count("ArcLEnd"), 2, "{}", files[0].text);
+    let body: Vec<&str> = files[0]
+        .text
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("Arc") || l.starts_with("MoveL"))
+        .collect();
+    let heads: Vec<&str> = body
+        .iter()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert_eq!(
+        heads,
+        ["MoveL", "ArcLStart", "ArcLEnd", "ArcLStart", "ArcLEnd"],
+        "{}",
+        files[0].text
+    );
+    // The second bead is approached at the travel's speed, not the bead's.
+    let approach = body[3];
+    let travel_speed = body[0].split(", ").nth(1).unwrap();
+    assert_eq!(
+        approach.split(", ").nth(1).unwrap(),
+        travel_speed,
+        "{approach}"
+    );
+    // The DO mode switches the signal off and on between the beads too.
+    let p = profile("abb-irb1600-rw7-do");
+    let files = rapid::emit(&path(600.0), &p, "w").unwrap();
+    let sets: Vec<&str> = files[0]
+        .text
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("SetDO"))
+        .collect();
+    assert_eq!(sets.len(), 5, "{}", files[0].text); // off at start, on/off per bead
+}
+
 #[test]
 fn splitting_starts_above_the_limit() {
     let mut p = profile("abb-irb2600-waam");
