@@ -183,7 +183,8 @@ pub struct SequenceSheetFeedback {
 }
 
 /// Goal of `Slice`: slice a part for wire-arc additive manufacturing (seed 004): mesh → layer
-/// contours → bead toolpath, with the deposited volume, times and cost.
+/// contours → bead toolpath, with the deposited volume, times and cost; or print one section
+/// of a G-Wing wing (seed 002): perimeters and spars with extrusion flow.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
 pub struct SliceGoal {
     /// Job identifier, carried into the LayerStack and the Toolpath.
@@ -191,8 +192,12 @@ pub struct SliceGoal {
     /// The part as an STL file (ASCII or binary, mm). Exactly one of `stl_file` and
     /// `wing_spec_file`.
     pub stl_file: String,
-    /// A wing spec (cell_wing YAML); not built yet: such goals end with `success = false`.
+    /// A wing spec (cell_wing YAML, seed 002): the slicer designs the wing and prints one
+    /// section.
     pub wing_spec_file: String,
+    /// With `wing_spec_file`: which section, an index into the design's sections (0 = the
+    /// centre section).
+    pub wing_section: u32,
     /// WAAM process profile (YAML, cell_waam format); empty = the built-in
     /// `config/processes/waam.yaml`.
     pub process_file: String,

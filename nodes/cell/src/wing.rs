@@ -16,12 +16,8 @@
 
 use std::{path::PathBuf, process::ExitCode};
 
-use cell_wing::{
-    estimate::{build_time_s, deposited_volume_mm3, mass_g, Acceleration},
-    layers::moves,
-    section::Side,
-    spec::{Wing, WingSpec},
-};
+use cell_slicer::wing::{side_name, SectionFigures};
+use cell_wing::spec::{Wing, WingSpec};
 use clap::Args;
 
 use crate::exit::{bad_data, failure, usage};
@@ -48,19 +44,11 @@ pub struct WingArgs {
     pub layers: usize,
 }
 
-/// One section in `report.json`.
+/// One section in `report.json`: the slicer's figures and the program written.
 #[derive(Debug, Serialize)]
 struct SectionReport {
-    index: usize,
-    side: &'static str,
-    position: usize,
-    y_bed_mm: f64,
-    y_top_mm: f64,
-    layers: usize,
-    deposited_volume_mm3: f64,
-    mass_g: f64,
-    build_time_s: f64,
-    build_time_with_acceleration_s: f64,
+    #[serde(flatten)]
+    figures: SectionFigures,
     program: String,
     program_lines: u32,
 }
@@ -78,20 +66,6 @@ struct Report {
     sections: Vec<SectionReport>,
     total_mass_g: f64,
     total_build_time_s: f64,
-}
-
-/// Marlin's stock acceleration and junction deviation, for the second build-time figure.
-const MARLIN_ACCELERATION: Acceleration = Acceleration {
-    accel_mm_s2: 1000.0,
-    junction_deviation_mm: 0.013,
-};
-
-fn side_name(side: Side) -> &'static str {
-    match side {
-        Side::Centre => "centre",
-        Side::Left => "left",
-        Side::Right => "right",
-    }
 }
 
 /// Runs `cell wing`.
@@ -168,22 +142,11 @@ pub fn run(a: WingArgs) -> ExitCode {
             bar.abandon();
             return failure(e);
         }
-        let path = moves(&layers, &bp);
+        let Some(figures) = SectionFigures::of(&wing, i, &layers) else {
+            continue;
+        };
         sections.push(SectionReport {
-            index: i,
-            side: side_name(section.side),
-            position: section.index,
-            y_bed_mm: section.y_bed_mm,
-            y_top_mm: section.y_top_mm,
-            layers: layers.len(),
-            deposited_volume_mm3: deposited_volume_mm3(&layers, bp.extrusion_width_mm),
-            mass_g: mass_g(
-                &layers,
-                bp.extrusion_width_mm,
-                wing.spec.build.density_kg_m3,
-            ),
-            build_time_s: build_time_s(&path, None),
-            build_time_with_acceleration_s: build_time_s(&path, Some(MARLIN_ACCELERATION)),
+            figures,
             program: file.name.clone(),
             program_lines: program.line_count,
         });
@@ -198,8 +161,8 @@ pub fn run(a: WingArgs) -> ExitCode {
         c_l: wing.aero.c_l,
         sections_in_design: wing.sections.len(),
         layers_limit: a.layers,
-        total_mass_g: sections.iter().map(|s| s.mass_g).sum(),
-        total_build_time_s: sections.iter().map(|s| s.build_time_s).sum(),
+        total_mass_g: sections.iter().map(|s| s.figures.mass_g).sum(),
+        total_build_time_s: sections.iter().map(|s| s.figures.build_time_s).sum(),
         sections,
     };
     let text = match serde_json::to_string_pretty(&report) {

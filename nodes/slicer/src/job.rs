@@ -33,8 +33,13 @@ pub const BUILTIN_PROCESS_NAME: &str = "config/processes/waam.yaml (built in)";
 pub enum PartSource {
     /// An STL file (ASCII or binary, mm).
     Stl(PathBuf),
-    /// A wing spec for `cell_wing` (not built yet: [`run`] answers [`JobError::WingNotBuilt`]).
-    WingSpec(PathBuf),
+    /// A wing spec for `cell_wing` ([`crate::wing::run_wing`]), and the section to print.
+    WingSpec {
+        /// The spec (YAML).
+        file: PathBuf,
+        /// Index into the design's sections.
+        section: usize,
+    },
 }
 
 /// Where the part is put in the work-object (build plate) frame.
@@ -100,9 +105,28 @@ pub enum JobError {
         /// What it must satisfy.
         requirement: &'static str,
     },
-    /// Wing specs are for `cell_wing`, which is not wired in yet.
-    #[error("{0}: wing path not built yet")]
-    WingNotBuilt(String),
+    /// A wing spec cannot be read, is invalid or its design fails (the message names the
+    /// field).
+    #[error("{file}: {error}")]
+    Wing {
+        /// The spec file.
+        file: String,
+        /// The cause.
+        error: String,
+    },
+    /// A wing section index beyond the design's sections.
+    #[error("{file}: wing_section {section}: the design has {sections} sections (0..{})", sections.saturating_sub(1))]
+    WingSection {
+        /// The spec file.
+        file: String,
+        /// The index asked for.
+        section: usize,
+        /// Sections in the design.
+        sections: usize,
+    },
+    /// [`run`] slices meshes; wing specs go to [`crate::wing::run_wing`].
+    #[error("{0}: a wing spec is not a mesh: run it with cell_slicer::wing::run_wing")]
+    NotAMesh(String),
 }
 
 /// Loads a process profile: `""` or `"waam"` is the built-in `config/processes/waam.yaml`,
@@ -387,7 +411,7 @@ pub fn placement_offset(placement: Placement, lo: [f64; 3], hi: [f64; 3]) -> [f6
 ///
 /// # Errors
 /// [`JobError`]: an unreadable or empty mesh (naming the file), a bad layer height or process
-/// profile (naming the field), a wing spec (not built yet).
+/// profile (naming the field), a wing spec ([`JobError::NotAMesh`]).
 pub fn run(
     job: &SliceJob,
     mut progress: impl FnMut(JobProgress),
@@ -395,7 +419,9 @@ pub fn run(
     let t0 = Instant::now();
     let file = match &job.part {
         PartSource::Stl(p) => p.clone(),
-        PartSource::WingSpec(p) => return Err(JobError::WingNotBuilt(p.display().to_string())),
+        PartSource::WingSpec { file, .. } => {
+            return Err(JobError::NotAMesh(file.display().to_string()))
+        }
     };
     let name = file.display().to_string();
     job.process.check(&job.process_name)?;
@@ -687,12 +713,12 @@ mod tests {
         let e = run(&job("empty.stl"), |_| {}).unwrap_err().to_string();
         assert!(e.contains("empty.stl"), "{e}");
         let mut j = job("20mm-xyz-cube.stl");
-        j.part = PartSource::WingSpec("wing.yaml".into());
+        j.part = PartSource::WingSpec {
+            file: "wing.yaml".into(),
+            section: 0,
+        };
         let e = run(&j, |_| {}).unwrap_err().to_string();
-        assert!(
-            e.contains("wing.yaml") && e.contains("not built yet"),
-            "{e}"
-        );
+        assert!(e.contains("wing.yaml") && e.contains("run_wing"), "{e}");
         let mut j = job("20mm-xyz-cube.stl");
         j.layer_height_mm = Some(-1.0);
         let e = run(&j, |_| {}).unwrap_err().to_string();

@@ -7,7 +7,8 @@
 //! Then the `Toolpath` is published on `toolpath` and the `LayerStack` on `layer_stack` (Plan
 //! QoS), every layer is logged to Rerun and the result carries both plus the report as JSON. A
 //! goal that fails (an unreadable, empty, truncated or NaN mesh, a bad process profile, a bad
-//! layer height, a wing spec) ends as aborted with `success = false` and a message naming the
+//! layer height, a wing spec that cannot be read, a section beyond the design's or one that does
+//! not fit the wing machine) ends as aborted with `success = false` and a message naming the
 //! file or field; the node keeps serving. Mesh defects (holes, non-manifold edges, open
 //! chains) are warnings: logged, put into the report, and the job goes on. Goals run one at a
 //! time, in arrival order; cancel requests are answered but not accepted.
@@ -18,12 +19,22 @@
 //! by bead width from blue (narrowest) to red (widest)), `/waam/layers/travel` (travel moves, grey);
 //! without the timeline `/waam/toolpath` (the whole toolpath, deposit vs travel, as every node
 //! logs toolpaths), `/waam/stock` (the stock model, seed 004 §4.8, as a mesh) and `/waam/log`.
+//!
+//! **Wing goals** (`wing_spec_file`, seed 002): the wing is designed and section `wing_section`
+//! printed by [`crate::wing::run_wing`] (feedback per layer); the toolpath carries extrusion flow
+//! for the emitter's Marlin profile, the stack one perimeter per layer. Every point must lie in
+//! the travel of the goal's machine (default `wing_machine_profile`). Rerun: `/wing/layers/
+//! perimeter`, `/wing/layers/spars`, `/wing/layers/rib` on the `layer` timeline, `/wing/toolpath`
+//! and `/wing/log`.
 
 use std::{sync::Arc, time::Duration};
 
 use cell_msgs::{LayerStack, SliceFeedback, SliceGoal, SliceResult, Toolpath};
 use cell_profiles::MachineProfile;
-use cell_runtime::{action::GoalEndStatus, CellNode, QosPreset};
+use cell_runtime::{
+    action::{ExecutingGoalHandle, GoalEndStatus},
+    CellNode, QosPreset,
+};
 use cell_waam::{LayerToolpath, SegmentKind};
 use serde::{Deserialize, Serialize};
 
@@ -51,6 +62,9 @@ pub struct SlicerParams {
     pub log_stock_mesh: bool,
     /// How long a finished goal's result waits for the client to ask for it, s.
     pub result_timeout_s: f64,
+    /// Machine profile of wing goals (seed 002) whose `machine_profile` is empty: every point
+    /// of the section must lie within its travel.
+    pub wing_machine_profile: String,
 }
 
 impl Default for SlicerParams {
@@ -61,6 +75,7 @@ impl Default for SlicerParams {
             place_on_plate: true,
             log_stock_mesh: true,
             result_timeout_s: 600.0,
+            wing_machine_profile: "marlin-extruder".into(),
         }
     }
 }
@@ -105,14 +120,17 @@ pub fn goal_to_job(
 ) -> Result<(SliceJob, MachineProfile), String> {
     let part = match (goal.stl_file.is_empty(), goal.wing_spec_file.is_empty()) {
         (false, true) => PartSource::Stl(goal.stl_file.clone().into()),
-        (true, false) => PartSource::WingSpec(goal.wing_spec_file.clone().into()),
+        (true, false) => PartSource::WingSpec {
+            file: goal.wing_spec_file.clone().into(),
+            section: goal.wing_section as usize,
+        },
         (true, true) => return Err("stl_file and wing_spec_file are both empty".into()),
         (false, false) => return Err("give stl_file or wing_spec_file, not both".into()),
     };
-    let machine_name = if goal.machine_profile.is_empty() {
-        &p.machine_profile
-    } else {
-        &goal.machine_profile
+    let machine_name = match (goal.machine_profile.is_empty(), &part) {
+        (false, _) => &goal.machine_profile,
+        (true, PartSource::WingSpec { .. }) => &p.wing_machine_profile,
+        (true, PartSource::Stl(_)) => &p.machine_profile,
     };
     let machine =
         MachineProfile::resolve(machine_name).map_err(|e| format!("machine_profile: {e}"))?;
@@ -336,73 +354,27 @@ pub async fn run(node: CellNode, p: SlicerParams) -> anyhow::Result<()> {
         let (status, result) = match goal_to_job(&goal, &p) {
             Err(e) => failed(&job_id, e),
             Ok((slice_job, machine)) => {
-                tracing::info!("slice: slicing {job_id} ({:?})", slice_job.part);
-                let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
-                let task = tokio::task::spawn_blocking(move || {
-                    job::run(&slice_job, |pr| {
-                        let _ = tx.send(pr);
-                    })
-                });
-                while let Some(pr) = rx.recv().await {
-                    if let Err(e) = server
-                        .publish_feedback(executing.clone(), feedback(pr))
-                        .await
-                    {
-                        tracing::warn!("slice: feedback {job_id}: {e:?}");
+                tracing::info!("slice: {job_id} ({:?})", slice_job.part);
+                let goal_ctx = GoalContext {
+                    node: &node,
+                    server: &server,
+                    executing: executing.clone(),
+                    job_id: &job_id,
+                };
+                let done = match slice_job.part.clone() {
+                    PartSource::WingSpec { file, section } => {
+                        serve_wing(&goal_ctx, file, section, &machine).await?
                     }
-                }
-                let outcome = task
-                    .await
-                    .map_err(|e| anyhow::anyhow!("slicing thread: {e}"))?;
-                match outcome {
-                    Err(e) => failed(&job_id, e.to_string()),
-                    Ok(mut out) => {
-                        let capped = cap_speeds(&mut out.layers, machine.max_feed_mm_s);
-                        if capped > 0 {
-                            out.report.warnings.push(format!(
-                                "{capped} points slowed to the machine's {} mm/s",
-                                machine.max_feed_mm_s
-                            ));
-                        }
-                        let mut toolpath =
-                            cell_waam::to_msg::toolpath_msg(&out.layers, &job_id, FRAME_ID);
-                        toolpath.header.stamp = cell_msgs::builtin_interfaces::Time::now();
-                        let stack = layer_stack_msg(&out.stack, &job_id, FRAME_ID);
-                        for w in &out.report.warnings {
-                            tracing::warn!("slice: {job_id}: {w}");
-                        }
-                        toolpaths.publish(toolpath.clone()).await?;
-                        stacks.publish(stack.clone()).await?;
-                        let r = &out.report;
-                        let message = format!(
-                            "sliced {job_id}: {} layers, {} contours, {:.0} mm³ deposited, \
-                             {:.0} s arc on + {:.0} s travel, {:.0} SEK{}",
-                            r.layers,
-                            r.contours,
-                            r.deposited_volume_mm3,
-                            r.deposition_time_s,
-                            r.travel_time_s,
-                            r.cost.total_sek,
-                            if r.warnings.is_empty() {
-                                String::new()
-                            } else {
-                                format!(" ({} warnings)", r.warnings.len())
-                            }
-                        );
-                        log_outcome(&node, &out, &toolpath, p.log_stock_mesh, &message);
-                        tracing::info!("slice: {message}");
-                        let report_json = serde_json::to_string(&out.report)
-                            .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-                        (
-                            GoalEndStatus::Succeeded,
-                            SliceResult {
-                                success: true,
-                                message,
-                                layer_stack: stack,
-                                toolpath,
-                                report_json,
-                            },
-                        )
+                    PartSource::Stl(_) => {
+                        serve_mesh(&goal_ctx, slice_job, &machine, p.log_stock_mesh).await?
+                    }
+                };
+                match done {
+                    Err(e) => failed(&job_id, e),
+                    Ok((toolpath, stack, result)) => {
+                        toolpaths.publish(toolpath).await?;
+                        stacks.publish(stack).await?;
+                        (GoalEndStatus::Succeeded, result)
                     }
                 }
             }
@@ -421,6 +393,206 @@ pub async fn run(node: CellNode, p: SlicerParams) -> anyhow::Result<()> {
             }
         });
     }
+}
+
+/// What one goal's handlers share.
+struct GoalContext<'a> {
+    node: &'a CellNode,
+    server: &'a SliceServer,
+    executing: ExecutingGoalHandle<SliceGoal>,
+    job_id: &'a str,
+}
+
+type SliceServer = cell_runtime::action::AsyncActionServer<SliceGoal, SliceResult, SliceFeedback>;
+
+/// A finished goal: what to publish and answer, or why it failed (one line).
+type Served = Result<(Toolpath, LayerStack, SliceResult), String>;
+
+impl GoalContext<'_> {
+    /// Runs `work` on a blocking thread, forwarding its progress reports as feedback.
+    async fn run_with_feedback<T: Send + 'static>(
+        &self,
+        work: impl FnOnce(&mut dyn FnMut(JobProgress)) -> T + Send + 'static,
+    ) -> anyhow::Result<T> {
+        let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
+        let task = tokio::task::spawn_blocking(move || {
+            work(&mut |pr| {
+                let _ = tx.send(pr);
+            })
+        });
+        while let Some(pr) = rx.recv().await {
+            if let Err(e) = self
+                .server
+                .publish_feedback(self.executing.clone(), feedback(pr))
+                .await
+            {
+                tracing::warn!("slice: feedback {}: {e:?}", self.job_id);
+            }
+        }
+        task.await
+            .map_err(|e| anyhow::anyhow!("slicing thread: {e}"))
+    }
+}
+
+/// The WAAM path: slice the mesh, plan the beads (seed 004).
+async fn serve_mesh(
+    cx: &GoalContext<'_>,
+    slice_job: SliceJob,
+    machine: &MachineProfile,
+    log_stock: bool,
+) -> anyhow::Result<Served> {
+    let job_id = cx.job_id;
+    let outcome = cx
+        .run_with_feedback(move |progress| job::run(&slice_job, progress))
+        .await?;
+    let mut out = match outcome {
+        Ok(out) => out,
+        Err(e) => return Ok(Err(e.to_string())),
+    };
+    let capped = cap_speeds(&mut out.layers, machine.max_feed_mm_s);
+    if capped > 0 {
+        out.report.warnings.push(format!(
+            "{capped} points slowed to the machine's {} mm/s",
+            machine.max_feed_mm_s
+        ));
+    }
+    let mut toolpath = cell_waam::to_msg::toolpath_msg(&out.layers, job_id, FRAME_ID);
+    toolpath.header.stamp = cell_msgs::builtin_interfaces::Time::now();
+    let stack = layer_stack_msg(&out.stack, job_id, FRAME_ID);
+    for w in &out.report.warnings {
+        tracing::warn!("slice: {job_id}: {w}");
+    }
+    let r = &out.report;
+    let message = format!(
+        "sliced {job_id}: {} layers, {} contours, {:.0} mm³ deposited, \
+         {:.0} s arc on + {:.0} s travel, {:.0} SEK{}",
+        r.layers,
+        r.contours,
+        r.deposited_volume_mm3,
+        r.deposition_time_s,
+        r.travel_time_s,
+        r.cost.total_sek,
+        if r.warnings.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} warnings)", r.warnings.len())
+        }
+    );
+    log_outcome(cx.node, &out, &toolpath, log_stock, &message);
+    tracing::info!("slice: {message}");
+    let report_json =
+        serde_json::to_string(&out.report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
+    let result = SliceResult {
+        success: true,
+        message,
+        layer_stack: stack.clone(),
+        toolpath: toolpath.clone(),
+        report_json,
+    };
+    Ok(Ok((toolpath, stack, result)))
+}
+
+/// The wing path: design the wing, print one section (seed 002).
+async fn serve_wing(
+    cx: &GoalContext<'_>,
+    file: std::path::PathBuf,
+    section: usize,
+    machine: &MachineProfile,
+) -> anyhow::Result<Served> {
+    let job_id = cx.job_id.to_string();
+    let id = job_id.clone();
+    let outcome = cx
+        .run_with_feedback(move |progress| {
+            crate::wing::run_wing(&file, section, &id, FRAME_ID, progress)
+        })
+        .await?;
+    let out = match outcome {
+        Ok(out) => out,
+        Err(e) => return Ok(Err(e.to_string())),
+    };
+    // The section must fit the printer (the emitter would refuse the program otherwise).
+    for (si, seg) in out.toolpath.segments.iter().enumerate() {
+        for q in &seg.points {
+            if let Err(v) = machine.check_position(&[('X', q.x), ('Y', q.y), ('Z', q.z)]) {
+                return Ok(Err(format!(
+                    "wing section {section} does not fit {}: segment {si}: {v}",
+                    machine.name
+                )));
+            }
+        }
+    }
+    let mut toolpath = out.toolpath.clone();
+    let now = cell_msgs::builtin_interfaces::Time::now();
+    toolpath.header.stamp = now;
+    let mut stack = out.stack.clone();
+    stack.header.stamp = now;
+    let f = &out.report.section;
+    let message = format!(
+        "printed {job_id}: wing section {section} ({} {}), {} layers, {:.1} g, {:.0} min \
+         (c_L {:.3})",
+        f.side,
+        f.position,
+        f.layers,
+        f.mass_g,
+        f.build_time_s / 60.0,
+        out.report.c_l
+    );
+    log_wing(cx.node, &out, &toolpath, &message);
+    tracing::info!("slice: {message}");
+    let report_json =
+        serde_json::to_string(&out.report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
+    let result = SliceResult {
+        success: true,
+        message,
+        layer_stack: stack.clone(),
+        toolpath: toolpath.clone(),
+        report_json,
+    };
+    Ok(Ok((toolpath, stack, result)))
+}
+
+/// Logs a wing section: per layer (on the `layer` timeline) the perimeter, the spars and the
+/// rib in their own colours; the whole toolpath; a summary line.
+fn log_wing(node: &CellNode, out: &crate::wing::WingOutcome, toolpath: &Toolpath, message: &str) {
+    use cell_wing::layers::Role;
+    let sink = node.rerun();
+    sink.set_time(&toolpath.header.stamp, 0);
+    sink.log_toolpath("/wing/toolpath", toolpath);
+    if let Some(rec) = sink.stream() {
+        let mut result = Ok(());
+        for layer in &out.layers {
+            rec.set_time_sequence("layer", i64::from(layer.index));
+            for (role, path, color) in [
+                (Role::Perimeter, "/wing/layers/perimeter", (60, 120, 230)),
+                (Role::Spar, "/wing/layers/spars", (230, 140, 40)),
+                (Role::Rib, "/wing/layers/rib", (90, 180, 90)),
+            ] {
+                let strips: Vec<Vec<[f32; 3]>> = layer
+                    .strokes
+                    .iter()
+                    .filter(|s| s.role == role)
+                    .map(|s| {
+                        s.points
+                            .iter()
+                            .map(|q| [q[0] as f32, q[1] as f32, q[2] as f32])
+                            .collect()
+                    })
+                    .collect();
+                result = result.and(
+                    rec.log(
+                        path,
+                        &rerun::LineStrips3D::new(strips)
+                            .with_colors([rerun::Color::from_rgb(color.0, color.1, color.2)]),
+                    ),
+                );
+            }
+        }
+        rec.disable_timeline("layer");
+        if let Err(e) = result {
+            tracing::warn!("rerun: {e}");
+        }
+    }
+    sink.log_text("/wing/log", message);
 }
 
 fn failed(job_id: &str, e: String) -> (GoalEndStatus, SliceResult) {
