@@ -57,7 +57,13 @@ async fn slice(
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_bad_goals() {
     let domain = common::fresh_domain();
-    let server_node = common::node("slicer", domain, false);
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("slicer.rrd");
+    let mut setup = cell_runtime::NodeSetup::local("slicer", domain);
+    setup.fast_path = cell_runtime::FastPathMode::Off;
+    setup.rerun = format!("save:{}", rrd.display()).parse().unwrap();
+    let shutdown = setup.shutdown.clone();
+    let server_node = cell_runtime::CellNode::new(setup).unwrap();
     let client_node = common::node("operator", domain, false);
     let slicer = tokio::spawn(run(server_node, SlicerParams::default()));
     let mut toolpaths = client_node
@@ -250,7 +256,29 @@ async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_b
     assert!(result.layer_stack.layers.len() > 1);
     assert_eq!(result.layer_stack.layer_height_mm, 2.0);
     assert!(!slicer.is_finished(), "the slicer node must stay up");
-    slicer.abort();
+
+    // Every layer went to Rerun (decoded with Rerun's own decoder): contours, beads coloured by
+    // width and the stock mesh of the WAAM parts, the wing's perimeters, spars and rib, on the
+    // `layer` timeline.
+    shutdown.trigger();
+    within(slicer).await.unwrap().unwrap();
+    let dump = common::rrd_dump(&rrd);
+    for entity in [
+        "/waam/layers/contours",
+        "/waam/layers/beads",
+        "/waam/layers/travel",
+        "/waam/toolpath",
+        "/waam/stock",
+        "/waam/log",
+        "/wing/layers/perimeter",
+        "/wing/layers/spars",
+        "/wing/layers/rib",
+        "/wing/toolpath",
+        "/wing/log",
+        "\"layer\"",
+    ] {
+        assert!(dump.contains(entity), "slicer.rrd has no {entity}");
+    }
 }
 
 const CELL: &str = env!("CARGO_BIN_EXE_cell");
