@@ -296,17 +296,9 @@ fn cell_slice_writes_layers_program_report_and_stock() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     let cube = stl("20mm-xyz-cube.stl");
-    // The built-in profile with a 2 mm torch lift on travel moves.
-    let process_file = dir.path().join("lift.yaml");
-    std::fs::write(
-        &process_file,
-        format!(
-            "{}\ntravel_lift_mm: 2.0\n",
-            cell_slicer::job::BUILTIN_PROCESS_YAML
-        )
-        .replace("travel_lift_mm: 0.0\n", ""),
-    )
-    .unwrap();
+    // The built-in profile: no torch lift, so every travel runs from a weld end straight to the
+    // next weld start (the RAPID writer once merged such beads into one weld run).
+    let process_file = std::path::PathBuf::from("waam");
     let run = cell_slice(&[
         "--stl".as_ref(),
         cube.as_os_str(),
@@ -332,7 +324,7 @@ fn cell_slice_writes_layers_program_report_and_stock() {
     // Same numbers as the crates give directly.
     let (process, process_name) =
         cell_slicer::job::load_process(process_file.to_str().unwrap()).unwrap();
-    assert_eq!(process.travel_lift_mm, 2.0);
+    assert_eq!(process.travel_lift_mm, 0.0);
     let direct = cell_slicer::job::run(
         &cell_slicer::job::SliceJob {
             part: cell_slicer::job::PartSource::Stl(cube.clone()),
