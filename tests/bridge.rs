@@ -808,6 +808,31 @@ async fn rapid_programs_run_on_the_rws_simulator_and_a_wrong_password_is_refused
     bridge.abort();
 }
 
+/// The shipped `abb-irb2600-waam-sim` controller: the bridge starts the RWS simulator itself
+/// (loopback, a login made up for the run, no credentials in any file) and runs a WAAM program
+/// on it through the same RWS client as a real IRC5.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_shipped_rws_simulator_controller_is_started_by_the_bridge_and_runs_rapid() {
+    let domain = fresh_domain();
+    let bridge = start_bridge(domain, vec!["abb-irb2600-waam-sim".into()]);
+    let mut op = operator(domain).await;
+    let program = emitted("wall", "abb-irb2600-waam", "wall-sim");
+    let (result, _) = execute(
+        &op.client,
+        goal(&program, "abb-irb2600-waam-sim"),
+        Duration::from_secs(120),
+    )
+    .await;
+    assert!(result.success, "{}", result.message);
+    assert_eq!(result.outcome, R::OUTCOME_FINISHED, "{}", result.message);
+    status_until(&mut op.status, "abb-irb2600-waam-sim", |s| {
+        s.state == MachineStatus::STATE_DONE
+    })
+    .await;
+    assert!(!bridge.is_finished());
+    bridge.abort();
+}
+
 const CELL: &str = env!("CARGO_BIN_EXE_cell");
 
 fn cell(args: &[&str]) -> std::process::Output {

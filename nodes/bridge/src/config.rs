@@ -53,6 +53,10 @@ pub const EMBEDDED_CONTROLLERS: &[(&str, &str)] = &[
         "abb-irb1600-rw7-do",
         include_str!("../../../config/controllers/abb-irb1600-rw7-do.yaml"),
     ),
+    (
+        "abb-irb2600-waam-sim",
+        include_str!("../../../config/controllers/abb-irb2600-waam-sim.yaml"),
+    ),
 ];
 
 /// A controller the bridge drives.
@@ -148,7 +152,7 @@ impl ControllerSpec {
             Some("rws") => {
                 let mut cfg = cell_rws::ControllerConfig::from_yaml_str(text, file)
                     .map_err(ControllerFileError::Rws)?;
-                if let (cell_rws::CredentialsSource::File(p), Some(dir)) =
+                if let (Some(cell_rws::CredentialsSource::File(p)), Some(dir)) =
                     (&mut cfg.credentials, dir)
                 {
                     if p.is_relative() {

@@ -121,7 +121,7 @@ impl Controller {
     pub async fn start(spec: ControllerSpec) -> anyhow::Result<Self> {
         Ok(match spec {
             ControllerSpec::Grbl(g) => Controller::Grbl(GrblController::start(g).await?),
-            ControllerSpec::Rws(r) => Controller::Rws(RwsController::start(r)?),
+            ControllerSpec::Rws(r) => Controller::Rws(RwsController::start(r).await?),
         })
     }
 

@@ -27,6 +27,8 @@ struct Seen {
 /// One RWS controller.
 pub struct RwsController {
     cfg: ControllerConfig,
+    /// The in-repo simulator behind a `simulator:` controller (stops with the controller).
+    sim: Option<cell_rws::sim::RwsSim>,
     client: Result<Arc<RwsClient>, String>,
     job: Mutex<Option<JobInfo>>,
     seen: Mutex<Seen>,
@@ -51,7 +53,17 @@ impl RwsController {
     ///
     /// # Errors
     /// None today; the signature leaves room for set-up that can fail.
-    pub fn start(cfg: ControllerConfig) -> anyhow::Result<Arc<Self>> {
+    pub async fn start(mut cfg: ControllerConfig) -> anyhow::Result<Arc<Self>> {
+        let sim = match cfg.simulator.clone() {
+            Some(endpoint) => {
+                let (sim, port, credentials) = start_simulator(&cfg, &endpoint).await?;
+                cfg.port = Some(port);
+                cfg.credentials = Some(credentials);
+                tracing::info!("{}: RWS simulator on {}", cfg.id, sim.url());
+                Some(sim)
+            }
+            None => None,
+        };
         let client = RwsClient::new(cfg.clone())
             .map(Arc::new)
             .map_err(|e| e.to_string());
@@ -64,6 +76,7 @@ impl RwsController {
         };
         let controller = Arc::new(RwsController {
             cfg,
+            sim,
             client,
             job: Mutex::new(None),
             seen: Mutex::new(seen),
@@ -77,9 +90,14 @@ impl RwsController {
         Ok(controller)
     }
 
-    /// The controller file.
+    /// The controller file (for a `simulator:` controller, with its port and login filled in).
     pub fn config(&self) -> &ControllerConfig {
         &self.cfg
+    }
+
+    /// The simulator behind a `simulator:` controller.
+    pub fn simulator(&self) -> Option<&cell_rws::sim::RwsSim> {
+        self.sim.as_ref()
     }
 
     /// The execution-state poll period.
@@ -348,4 +366,30 @@ async fn poll_state(controller: std::sync::Weak<RwsController>) {
         drop(c);
         tokio::time::sleep(POLL).await;
     }
+}
+
+/// Starts the in-repo RWS simulator for a `simulator:` controller, with a login made up here
+/// (nothing secret is written anywhere): the simulator, its port and the credentials.
+async fn start_simulator(
+    cfg: &ControllerConfig,
+    endpoint: &cell_rws::SimulatorEndpoint,
+) -> anyhow::Result<(cell_rws::sim::RwsSim, u16, cell_rws::CredentialsSource)> {
+    use std::hash::{BuildHasher, Hasher};
+    // A per-run password from the standard library's randomly keyed hasher.
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u64(u64::from(std::process::id()));
+    let password = format!("{:016x}", h.finish());
+    let user = "cellsuite";
+    let mut sim_cfg = cell_rws::sim::SimConfig::new(cfg.rws, user, &password);
+    sim_cfg.run_time = Duration::from_secs_f64(endpoint.run_s);
+    sim_cfg.task = cfg.task.clone();
+    let sim = cell_rws::sim::RwsSim::start(sim_cfg)
+        .await
+        .map_err(|e| anyhow::anyhow!("{}: the RWS simulator cannot listen: {e}", cfg.id))?;
+    let port = sim.addr().port();
+    let credentials = cell_rws::CredentialsSource::Given(cell_rws::Credentials {
+        user: user.into(),
+        password,
+    });
+    Ok((sim, port, credentials))
 }

@@ -16,7 +16,7 @@ use std::time::Duration;
 
 use base64::Engine as _;
 
-use crate::config::{ControllerConfig, Credentials, RwsVersion};
+use crate::config::{ConfigError, ControllerConfig, Credentials, RwsVersion};
 use crate::endpoints::{Api, Call, Method};
 use crate::error::{codes, AbbStatus, RwsError};
 
@@ -109,7 +109,17 @@ impl RwsClient {
     /// [`RwsError::Config`] for unreadable credentials; [`RwsError::Transport`] if the HTTP
     /// client cannot be built.
     pub fn new(cfg: ControllerConfig) -> Result<Self, RwsError> {
-        let creds = cfg.credentials.load()?;
+        let creds = cfg
+            .credentials
+            .as_ref()
+            .ok_or_else(|| ConfigError::Invalid {
+                file: cfg.id.clone(),
+                field: "credentials".into(),
+                message:
+                    "missing (a simulator controller gets its login when the bridge starts it)"
+                        .into(),
+            })?
+            .load()?;
         let builder = reqwest::Client::builder()
             .connect_timeout(cfg.timeouts.connect())
             .timeout(cfg.timeouts.request())
@@ -226,7 +236,11 @@ impl RwsClient {
         RwsError::Auth {
             controller: self.cfg.id.clone(),
             scheme,
-            credentials: self.cfg.credentials.to_string(),
+            credentials: self
+                .cfg
+                .credentials
+                .as_ref()
+                .map_or_else(|| "none".into(), ToString::to_string),
         }
     }
 

@@ -58,6 +58,9 @@ pub enum CredentialsSource {
     /// The first line of this file holds `user:password`; a relative path is taken from the
     /// directory of the configuration file.
     File(PathBuf),
+    /// Given in-process, never read from YAML: the bridge's own simulator (`simulator:`)
+    /// makes a fresh login when it starts.
+    Given(Credentials),
 }
 
 /// The YAML form of [`CredentialsSource`] (serde_norway reads enums only from YAML tags).
@@ -85,6 +88,7 @@ impl fmt::Display for CredentialsSource {
         match self {
             CredentialsSource::Env(var) => write!(f, "${var}"),
             CredentialsSource::File(path) => write!(f, "{}", path.display()),
+            CredentialsSource::Given(c) => write!(f, "the simulator's login for {}", c.user),
         }
     }
 }
@@ -115,6 +119,7 @@ impl CredentialsSource {
     /// `user:password` with a non-empty user.
     pub fn load(&self) -> Result<Credentials, ConfigError> {
         let (text, from) = match self {
+            CredentialsSource::Given(c) => return Ok(c.clone()),
             CredentialsSource::Env(var) => match std::env::var(var) {
                 Ok(v) => (v, format!("${var}")),
                 Err(std::env::VarError::NotPresent) => {
@@ -210,8 +215,14 @@ pub struct ControllerConfig {
     pub port: Option<u16>,
     /// RWS generation.
     pub rws: RwsVersion,
-    /// Where the login secret comes from; never the secret itself.
-    pub credentials: CredentialsSource,
+    /// Where the login secret comes from; never the secret itself. Required unless
+    /// `simulator` is given.
+    #[serde(default)]
+    pub credentials: Option<CredentialsSource>,
+    /// Instead of `url`/`port`: the in-repo RWS simulator ([`crate::sim`]), started by the
+    /// machine bridge on loopback with a fresh login (no `credentials`).
+    #[serde(default)]
+    pub simulator: Option<SimulatorEndpoint>,
     /// Request timeouts.
     #[serde(default)]
     pub timeouts: Timeouts,
@@ -235,6 +246,20 @@ pub struct ControllerConfig {
     /// cells (`ArcL`) stop the arc with the program and need none.
     #[serde(default)]
     pub heat_off_outputs: Vec<SignalValue>,
+}
+
+/// The `simulator:` endpoint of a controller file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimulatorEndpoint {
+    /// How long a started program "runs" before RAPID stops by itself, s. Default 2.
+    pub run_s: f64,
+}
+
+impl Default for SimulatorEndpoint {
+    fn default() -> Self {
+        SimulatorEndpoint { run_s: 2.0 }
+    }
 }
 
 /// A signal and the value to write to it.
@@ -352,7 +377,7 @@ impl ControllerConfig {
             message: e.to_string(),
         })?;
         let mut cfg = Self::from_yaml_str(&text, &name)?;
-        if let CredentialsSource::File(p) = &mut cfg.credentials {
+        if let Some(CredentialsSource::File(p)) = &mut cfg.credentials {
             if p.is_relative() {
                 if let Some(dir) = path.parent() {
                     *p = dir.join(&*p);
@@ -402,14 +427,45 @@ impl ControllerConfig {
         if self.id.trim().is_empty() {
             return Err(invalid("id", "empty".into()));
         }
+        if let Some(sim) = &self.simulator {
+            if self.url.is_some() || self.port.is_some() {
+                return Err(invalid(
+                    "simulator",
+                    "give one of `url`, `port` and `simulator`".into(),
+                ));
+            }
+            if self.credentials.is_some() {
+                return Err(invalid(
+                    "credentials",
+                    "the simulator makes its own login: remove `credentials`".into(),
+                ));
+            }
+            if !(sim.run_s.is_finite() && sim.run_s >= 0.0 && sim.run_s < 1e6) {
+                return Err(invalid(
+                    "simulator.run_s",
+                    format!("{}: expected seconds ≥ 0", sim.run_s),
+                ));
+            }
+        } else if self.credentials.is_none() {
+            return Err(invalid(
+                "credentials",
+                "missing: give `credentials: {env: VARIABLE}` or `{file: PATH}`".into(),
+            ));
+        }
         match (&self.url, self.port) {
+            _ if self.simulator.is_some() => {}
             (Some(_), Some(_)) => {
                 return Err(invalid(
                     "url",
                     "give either `url` or `port`, not both".into(),
                 ))
             }
-            (None, None) => return Err(invalid("url", "missing (or give `port`)".into())),
+            (None, None) => {
+                return Err(invalid(
+                    "url",
+                    "missing (or give `port` or `simulator`)".into(),
+                ))
+            }
             (Some(url), None) => {
                 let https = url.starts_with("https://");
                 if !https && !url.starts_with("http://") {
@@ -484,7 +540,8 @@ impl ControllerConfig {
             url: None,
             port: Some(port),
             rws,
-            credentials,
+            credentials: Some(credentials),
+            simulator: None,
             timeouts: Timeouts::default(),
             task: default_task(),
             program_dir: default_program_dir(),
@@ -507,7 +564,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(cfg.base_url(), "http://10.0.0.1");
-        assert_eq!(cfg.credentials, CredentialsSource::Env("R1_CRED".into()));
+        assert_eq!(
+            cfg.credentials,
+            Some(CredentialsSource::Env("R1_CRED".into()))
+        );
         assert_eq!(cfg.task, "T_ROB1");
         assert_eq!(cfg.timeouts.connect_s, 5.0);
         assert_eq!(cfg.timeouts.request_s, 10.0);

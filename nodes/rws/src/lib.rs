@@ -32,6 +32,7 @@ pub mod sim;
 
 pub use client::{ExecState, ExecutionState, InstalledProgram, RwsClient};
 pub use config::{
-    ControllerConfig, Credentials, CredentialsSource, RwsVersion, SignalValue, Timeouts,
+    ControllerConfig, Credentials, CredentialsSource, RwsVersion, SignalValue, SimulatorEndpoint,
+    Timeouts,
 };
 pub use error::{AbbStatus, RwsError};

@@ -159,7 +159,7 @@ async fn login_with_good_and_bad_credentials() {
 
         let wrong = write_credentials(dir.path(), &format!("{USER}:robotics\n"));
         let mut bad = cfg.clone();
-        bad.credentials = CredentialsSource::File(wrong.clone());
+        bad.credentials = Some(CredentialsSource::File(wrong.clone()));
         let e = RwsClient::connect(bad).await.unwrap_err();
         let scheme = match version {
             RwsVersion::Rw6 => "digest",
@@ -489,7 +489,7 @@ async fn credentials_from_environment_and_file() {
     let cfg = ControllerConfig::load(&yaml).unwrap();
     assert_eq!(
         cfg.credentials,
-        CredentialsSource::File(dir.path().join("secrets/r1.cred"))
+        Some(CredentialsSource::File(dir.path().join("secrets/r1.cred")))
     );
     RwsClient::connect(cfg).await.unwrap();
 
@@ -522,6 +522,32 @@ fn inline_password_in_yaml_is_rejected() {
 }
 
 #[test]
+fn a_simulator_controller_needs_no_credentials_and_takes_no_address() {
+    let ok =
+        ControllerConfig::from_yaml_str("id: s\nrws: rw6\nsimulator: {run_s: 1.5}\n", "s.yaml")
+            .unwrap();
+    assert_eq!(ok.simulator.as_ref().map(|s| s.run_s), Some(1.5));
+    assert!(ok.credentials.is_none());
+    for (yaml, field) in [
+        ("id: s\nrws: rw6\nport: 80\nsimulator: {}\n", "simulator"),
+        (
+            "id: s\nrws: rw6\nsimulator: {}\ncredentials: {env: X}\n",
+            "credentials",
+        ),
+        (
+            "id: s\nrws: rw6\nsimulator: {run_s: -1}\n",
+            "simulator.run_s",
+        ),
+        ("id: s\nrws: rw6\nport: 80\n", "credentials"),
+    ] {
+        let e = ControllerConfig::from_yaml_str(yaml, "s.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("s.yaml") && e.contains(field), "{yaml}: {e}");
+    }
+}
+
+#[test]
 fn committed_controller_configs_parse() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/controllers");
     let mut n = 0;
@@ -536,7 +562,14 @@ fn committed_controller_configs_parse() {
             let r = ControllerConfig::load(&path);
             // An https URL needs the `tls` feature; everything else must parse.
             match r {
-                Ok(cfg) => assert!(matches!(cfg.credentials, CredentialsSource::Env(_))),
+                // Real controllers read their login from the environment; the simulator
+                // makes its own and names no credentials.
+                Ok(cfg) => assert!(
+                    matches!(cfg.credentials, Some(CredentialsSource::Env(_)))
+                        || (cfg.simulator.is_some() && cfg.credentials.is_none()),
+                    "{}",
+                    path.display()
+                ),
                 Err(e) => assert!(
                     !cfg!(feature = "tls") && e.to_string().contains("`tls` feature"),
                     "{}: {e}",
