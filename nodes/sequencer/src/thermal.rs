@@ -36,8 +36,15 @@ use serde::{Deserialize, Serialize};
 
 use crate::problem::{distance, Contour, Point};
 
-/// Side of the square update tiles, cells.
-const TILE: usize = 16;
+/// Width of the update tiles, cells (divides [`BLOCK`]).
+const TW: usize = 8;
+/// Height of the update tiles, cells.
+const TH: usize = 8;
+/// Width of the aligned column blocks that pick a row's arithmetic (the plain metal stencil or
+/// the mixed-conductivity one) and whether a tile's cells take the per-cell path. It is the
+/// tile width of the first tiled version, kept so the tiling can change without changing a
+/// single bit of the results (the two stencils round differently).
+const BLOCK: usize = 16;
 
 /// Tile edge flags: heat on the left/right/bottom/top border of a tile, or anywhere.
 const LEFT: u8 = 1;
@@ -320,6 +327,8 @@ pub struct ThermalSim<'a> {
     next: Vec<f32>,
     /// Conductivity of each cell (metal or air).
     kc: Vec<f32>,
+    /// Kerf cells (air from the moment they are melted; the metal maximum skips them).
+    air: Vec<bool>,
     /// Cells melted since the last step: they turn into air after it.
     fresh: Vec<usize>,
     tiles_x: usize,
@@ -332,6 +341,10 @@ pub struct ThermalSim<'a> {
     active_list: Vec<usize>,
     stamp: Vec<u64>,
     update_list: Vec<usize>,
+    /// The previous step's update list (its tiles may hold stale values in `next`).
+    prev_update: Vec<usize>,
+    /// New edge flags per entry of `update_list`.
+    new_edges: Vec<u8>,
     step: u64,
     cells_updated: u64,
     time_s: f64,
@@ -365,8 +378,8 @@ impl<'a> ThermalSim<'a> {
             "gives a raster over 10^8 cells for this sheet",
         )?;
         let n = width * height;
-        let tiles_x = width.div_ceil(TILE);
-        let tiles_y = height.div_ceil(TILE);
+        let tiles_x = width.div_ceil(TW);
+        let tiles_y = height.div_ceil(TH);
         Ok(ThermalSim {
             params: params.clone(),
             width,
@@ -375,6 +388,7 @@ impl<'a> ThermalSim<'a> {
             t: vec![0.0; n],
             next: vec![0.0; n],
             kc: vec![params.k_conductivity; n],
+            air: vec![false; n],
             fresh: Vec::new(),
             tiles_x,
             tiles_y,
@@ -384,6 +398,8 @@ impl<'a> ThermalSim<'a> {
             active_list: Vec::new(),
             stamp: vec![0; tiles_x * tiles_y],
             update_list: Vec::new(),
+            prev_update: Vec::new(),
+            new_edges: Vec::new(),
             step: 0,
             cells_updated: 0,
             time_s: 0.0,
@@ -482,18 +498,19 @@ impl<'a> ThermalSim<'a> {
         let i = y * w + x;
         self.t[i] = self.melt_excess;
         self.fresh.push(i);
+        self.air[i] = true;
         // Cells next to kerf take the slow (mixed-conductivity) path from now on.
         for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
             for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
                 self.slow[yy * w + xx] = true;
             }
         }
-        let tile = (y / TILE) * self.tiles_x + x / TILE;
+        let tile = (y / TH) * self.tiles_x + x / TW;
         self.edges[tile] |= edge_bits(
-            x % TILE,
-            y % TILE,
-            TILE.min(w - x / TILE * TILE),
-            TILE.min(h - y / TILE * TILE),
+            x % TW,
+            y % TH,
+            TW.min(w - x / TW * TW),
+            TH.min(h - y / TH * TH),
         );
         if !self.active[tile] {
             self.active[tile] = true;
@@ -546,99 +563,51 @@ impl<'a> ThermalSim<'a> {
         // double-buffered, so order only matters for the active list).
         self.update_list.sort_unstable();
         let (w, h) = (self.width, self.height);
-        self.cells_updated += (self.update_list.len() * TILE * TILE) as u64;
-        let k_loss = self.params.k_loss;
-        let k_metal = self.params.k_conductivity;
+        self.cells_updated += (self.update_list.len() * TW * TH) as u64;
         let grid = Grid {
             t: &self.t,
             kc: &self.kc,
             slow: &self.slow,
+            air: &self.air,
             w,
             h,
-            k_metal,
+            k_metal: self.params.k_conductivity,
+            k_air: self.params.k_air,
+            k_loss: self.params.k_loss,
+            eps: self.params.epsilon_c,
+            tiles_x: self.tiles_x,
         };
-        let next = &mut self.next;
-        for &tile in &self.update_list {
-            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
-            let (x0, y0) = (tx * TILE, ty * TILE);
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let interior_cols = x0 > 0 && x1 < w;
-            for y in y0..y1 {
-                let border_row = y == 0 || y + 1 == h;
-                let row = y * w;
-                if !border_row && interior_cols {
-                    let out = &mut next[row + x0..row + x1];
-                    if grid.slow[row + x0..row + x1].iter().any(|&b| b) {
-                        grid.mixed_run(row + x0, row + x1, out, k_loss);
-                    } else {
-                        grid.metal_run(row + x0, row + x1, out, k_loss);
-                    }
-                    continue;
-                }
-                for x in x0..x1 {
-                    let v = if border_row || x == 0 || x + 1 == w {
-                        grid.generic_cell(x, y)
-                    } else {
-                        grid.interior_cell(y * w + x)
-                    };
-                    next[y * w + x] = v * k_loss;
+        self.new_edges.clear();
+        self.new_edges.resize(self.update_list.len(), 0);
+        let max_metal = grid.update_tiles(&self.update_list, &mut self.next, 0, &mut self.new_edges);
+        self.max_metal_excess = self.max_metal_excess.max(max_metal);
+        // Tiles updated last step but not now hold stale values in the write buffer: they
+        // are zero in the current state (inactive, no heat reaching them), so zero them.
+        for &tile in &self.prev_update {
+            if self.stamp[tile] != stamp {
+                let (x0, y0) = ((tile % self.tiles_x) * TW, (tile / self.tiles_x) * TH);
+                let (x1, y1) = ((x0 + TW).min(w), (y0 + TH).min(h));
+                for y in y0..y1 {
+                    self.next[y * w + x0..y * w + x1].fill(0.0);
                 }
             }
         }
+        // The write buffer now holds the whole new state (see above): swap.
+        std::mem::swap(&mut self.t, &mut self.next);
+        std::mem::swap(&mut self.prev_update, &mut self.update_list);
         // Fresh kerf turns into air after its one step as molten metal.
         for &i in &self.fresh {
             self.kc[i] = self.params.k_air;
         }
         self.fresh.clear();
-        // Copy back, round to ambient, track activity, hot edges and the metal maximum.
-        let eps = self.params.epsilon_c;
-        let k_air = self.params.k_air;
-        let mut max_metal = self.max_metal_excess;
         self.active_list.clear();
-        for &tile in &self.update_list {
-            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
-            let (x0, y0) = (tx * TILE, ty * TILE);
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let mut edges = 0u8;
-            for y in y0..y1 {
-                let row = y * w;
-                let mut row_any = false;
-                for i in row + x0..row + x1 {
-                    let mut v = self.next[i];
-                    if v < eps {
-                        v = 0.0;
-                    } else {
-                        row_any = true;
-                        // Metal cells (air cells hold kerf heat); equal k means no air.
-                        if self.kc[i] != k_air || k_air == k_metal {
-                            max_metal = max_metal.max(v);
-                        }
-                    }
-                    self.t[i] = v;
-                }
-                if row_any {
-                    edges |= ANY;
-                    if y == y0 {
-                        edges |= BOTTOM;
-                    }
-                    if y + 1 == y1 {
-                        edges |= TOP;
-                    }
-                    if self.t[row + x0] > 0.0 {
-                        edges |= LEFT;
-                    }
-                    if self.t[row + x1 - 1] > 0.0 {
-                        edges |= RIGHT;
-                    }
-                }
-            }
+        for (&tile, &edges) in self.prev_update.iter().zip(&self.new_edges) {
             self.edges[tile] = edges;
             self.active[tile] = edges != 0;
             if edges != 0 {
                 self.active_list.push(tile);
             }
         }
-        self.max_metal_excess = max_metal;
         if let Some((every, observer)) = self.observer.as_mut() {
             if self.step.is_multiple_of(*every) {
                 let frame = Frame {
@@ -742,12 +711,97 @@ struct Grid<'g> {
     t: &'g [f32],
     kc: &'g [f32],
     slow: &'g [bool],
+    air: &'g [bool],
     w: usize,
     h: usize,
     k_metal: f32,
+    k_air: f32,
+    k_loss: f32,
+    eps: f32,
+    tiles_x: usize,
 }
 
 impl Grid<'_> {
+    /// Updates `tiles` into `next`, the write buffer from cell index `base` on (a band of
+    /// whole rows holding the tiles): the new values with `k_loss` applied and excesses below
+    /// `epsilon_c` rounded to ambient. Writes each tile's new edge flags into `edges` and
+    /// returns the hottest new metal excess (0 if none).
+    fn update_tiles(&self, tiles: &[usize], next: &mut [f32], base: usize, edges: &mut [u8]) -> f32 {
+        let (w, h) = (self.w, self.h);
+        let mut max_metal = 0.0f32;
+        for (&tile, e_out) in tiles.iter().zip(edges.iter_mut()) {
+            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
+            let (x0, y0) = (tx * TW, ty * TH);
+            let (x1, y1) = ((x0 + TW).min(w), (y0 + TH).min(h));
+            // The arithmetic is chosen per aligned BLOCK of columns (see `BLOCK`).
+            let bx0 = x0 / BLOCK * BLOCK;
+            let bx1 = (bx0 + BLOCK).min(w);
+            let interior_cols = bx0 > 0 && bx1 < w;
+            let mut e = 0u8;
+            for y in y0..y1 {
+                let border_row = y == 0 || y + 1 == h;
+                let row = y * w;
+                let out = &mut next[row + x0 - base..row + x1 - base];
+                if !border_row && interior_cols {
+                    if self.slow[row + bx0..row + bx1].iter().any(|&b| b) {
+                        self.mixed_run(row + x0, row + x1, out, self.k_loss);
+                    } else {
+                        self.metal_run(row + x0, row + x1, out, self.k_loss);
+                    }
+                } else {
+                    for (x, o) in (x0..x1).zip(out.iter_mut()) {
+                        let v = if border_row || x == 0 || x + 1 == w {
+                            self.generic_cell(x, y)
+                        } else {
+                            self.interior_cell(row + x)
+                        };
+                        *o = v * self.k_loss;
+                    }
+                }
+                // Round to ambient, track activity, hot edges and the metal maximum.
+                let (row_any, m) = self.finish_row(out, &self.air[row + x0..row + x1]);
+                max_metal = max_metal.max(m);
+                if row_any {
+                    e |= ANY;
+                    if y == y0 {
+                        e |= BOTTOM;
+                    }
+                    if y + 1 == y1 {
+                        e |= TOP;
+                    }
+                    if out[0] > 0.0 {
+                        e |= LEFT;
+                    }
+                    if out[out.len() - 1] > 0.0 {
+                        e |= RIGHT;
+                    }
+                }
+            }
+            *e_out = e;
+        }
+        max_metal
+    }
+
+    /// Rounds a freshly computed row to ambient below `epsilon_c`; whether any cell stayed
+    /// (at or above `epsilon_c`) and the hottest metal cell among them (0 if none). Equal
+    /// conductivities mean there is no air.
+    fn finish_row(&self, out: &mut [f32], air: &[bool]) -> (bool, f32) {
+        let eps = self.eps;
+        let no_air = self.k_air == self.k_metal;
+        let mut any = false;
+        let mut m = 0.0f32;
+        for (v, &a) in out.iter_mut().zip(air) {
+            let keep = !(*v < eps);
+            let x = if keep { *v } else { 0.0 };
+            *v = x;
+            any |= keep;
+            if keep && (!a || no_air) {
+                m = m.max(x);
+            }
+        }
+        (any, m)
+    }
+
     /// `T + Σ k·(T_S − T)` over on-sheet neighbours (before `k_loss`), any cell.
     fn generic_cell(&self, x: usize, y: usize) -> f32 {
         let (w, h) = (self.w, self.h);
