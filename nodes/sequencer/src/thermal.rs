@@ -32,6 +32,7 @@
 //! Speed: only tiles of 16 × 16 cells that hold heat (above `epsilon_c`), and their
 //! neighbours, are updated; smaller excesses are rounded to ambient.
 
+use multiversion::multiversion;
 use serde::{Deserialize, Serialize};
 
 use crate::problem::{distance, Contour, Point};
@@ -338,6 +339,10 @@ pub struct ThermalSim<'a> {
     edges: Vec<u8>,
     /// Cells next to kerf: they need the mixed-conductivity update.
     slow: Vec<bool>,
+    /// Per row and aligned [`BLOCK`] of columns: whether any of its cells is `slow`.
+    slow_block: Vec<bool>,
+    /// Column blocks per row.
+    blocks_x: usize,
     active_list: Vec<usize>,
     stamp: Vec<u64>,
     update_list: Vec<usize>,
@@ -395,6 +400,8 @@ impl<'a> ThermalSim<'a> {
             active: vec![false; tiles_x * tiles_y],
             edges: vec![0; tiles_x * tiles_y],
             slow: vec![false; n],
+            slow_block: vec![false; width.div_ceil(BLOCK) * height],
+            blocks_x: width.div_ceil(BLOCK),
             active_list: Vec::new(),
             stamp: vec![0; tiles_x * tiles_y],
             update_list: Vec::new(),
@@ -503,6 +510,7 @@ impl<'a> ThermalSim<'a> {
         for yy in y.saturating_sub(1)..=(y + 1).min(h - 1) {
             for xx in x.saturating_sub(1)..=(x + 1).min(w - 1) {
                 self.slow[yy * w + xx] = true;
+                self.slow_block[yy * self.blocks_x + xx / BLOCK] = true;
             }
         }
         let tile = (y / TH) * self.tiles_x + x / TW;
@@ -568,6 +576,8 @@ impl<'a> ThermalSim<'a> {
             t: &self.t,
             kc: &self.kc,
             slow: &self.slow,
+            slow_block: &self.slow_block,
+            blocks_x: self.blocks_x,
             air: &self.air,
             w,
             h,
@@ -579,7 +589,13 @@ impl<'a> ThermalSim<'a> {
         };
         self.new_edges.clear();
         self.new_edges.resize(self.update_list.len(), 0);
-        let max_metal = grid.update_tiles(&self.update_list, &mut self.next, 0, &mut self.new_edges);
+        let max_metal = update_tiles(
+            &grid,
+            &self.update_list,
+            &mut self.next,
+            0,
+            &mut self.new_edges,
+        );
         self.max_metal_excess = self.max_metal_excess.max(max_metal);
         // Tiles updated last step but not now hold stale values in the write buffer: they
         // are zero in the current state (inactive, no heat reaching them), so zero them.
@@ -711,6 +727,8 @@ struct Grid<'g> {
     t: &'g [f32],
     kc: &'g [f32],
     slow: &'g [bool],
+    slow_block: &'g [bool],
+    blocks_x: usize,
     air: &'g [bool],
     w: usize,
     h: usize,
@@ -722,87 +740,29 @@ struct Grid<'g> {
 }
 
 impl Grid<'_> {
-    /// Updates `tiles` into `next`, the write buffer from cell index `base` on (a band of
-    /// whole rows holding the tiles): the new values with `k_loss` applied and excesses below
-    /// `epsilon_c` rounded to ambient. Writes each tile's new edge flags into `edges` and
-    /// returns the hottest new metal excess (0 if none).
-    fn update_tiles(&self, tiles: &[usize], next: &mut [f32], base: usize, edges: &mut [u8]) -> f32 {
-        let (w, h) = (self.w, self.h);
-        let mut max_metal = 0.0f32;
-        for (&tile, e_out) in tiles.iter().zip(edges.iter_mut()) {
-            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
-            let (x0, y0) = (tx * TW, ty * TH);
-            let (x1, y1) = ((x0 + TW).min(w), (y0 + TH).min(h));
-            // The arithmetic is chosen per aligned BLOCK of columns (see `BLOCK`).
-            let bx0 = x0 / BLOCK * BLOCK;
-            let bx1 = (bx0 + BLOCK).min(w);
-            let interior_cols = bx0 > 0 && bx1 < w;
-            let mut e = 0u8;
-            for y in y0..y1 {
-                let border_row = y == 0 || y + 1 == h;
-                let row = y * w;
-                let out = &mut next[row + x0 - base..row + x1 - base];
-                if !border_row && interior_cols {
-                    if self.slow[row + bx0..row + bx1].iter().any(|&b| b) {
-                        self.mixed_run(row + x0, row + x1, out, self.k_loss);
-                    } else {
-                        self.metal_run(row + x0, row + x1, out, self.k_loss);
-                    }
-                } else {
-                    for (x, o) in (x0..x1).zip(out.iter_mut()) {
-                        let v = if border_row || x == 0 || x + 1 == w {
-                            self.generic_cell(x, y)
-                        } else {
-                            self.interior_cell(row + x)
-                        };
-                        *o = v * self.k_loss;
-                    }
-                }
-                // Round to ambient, track activity, hot edges and the metal maximum.
-                let (row_any, m) = self.finish_row(out, &self.air[row + x0..row + x1]);
-                max_metal = max_metal.max(m);
-                if row_any {
-                    e |= ANY;
-                    if y == y0 {
-                        e |= BOTTOM;
-                    }
-                    if y + 1 == y1 {
-                        e |= TOP;
-                    }
-                    if out[0] > 0.0 {
-                        e |= LEFT;
-                    }
-                    if out[out.len() - 1] > 0.0 {
-                        e |= RIGHT;
-                    }
-                }
-            }
-            *e_out = e;
-        }
-        max_metal
-    }
-
     /// Rounds a freshly computed row to ambient below `epsilon_c`; whether any cell stayed
     /// (at or above `epsilon_c`) and the hottest metal cell among them (0 if none). Equal
     /// conductivities mean there is no air.
+    #[inline(always)]
     fn finish_row(&self, out: &mut [f32], air: &[bool]) -> (bool, f32) {
         let eps = self.eps;
         let no_air = self.k_air == self.k_metal;
         let mut any = false;
         let mut m = 0.0f32;
+        // Branch-free so it vectorises (no NaN here: every input is finite).
         for (v, &a) in out.iter_mut().zip(air) {
             let keep = !(*v < eps);
             let x = if keep { *v } else { 0.0 };
             *v = x;
             any |= keep;
-            if keep && (!a || no_air) {
-                m = m.max(x);
-            }
+            let metal = if keep & (!a | no_air) { x } else { 0.0 };
+            m = if metal > m { metal } else { m };
         }
         (any, m)
     }
 
     /// `T + Σ k·(T_S − T)` over on-sheet neighbours (before `k_loss`), any cell.
+    #[inline(always)]
     fn generic_cell(&self, x: usize, y: usize) -> f32 {
         let (w, h) = (self.w, self.h);
         let i = y * w + x;
@@ -822,7 +782,9 @@ impl Grid<'_> {
     /// A run of interior metal cells `a..b` of one row (none next to kerf), written with
     /// `k_loss` applied: `(T + k(Σ neighbours − 8·T))·k_loss`, in a form the compiler
     /// vectorises.
-    fn metal_run(&self, a: usize, b: usize, out: &mut [f32], k_loss: f32) {
+    #[inline(always)]
+    fn metal_run(&self, a: usize, b: usize, out: &mut [f32]) {
+        let k_loss = self.k_loss;
         let w = self.w;
         let t = self.t;
         let n = b - a;
@@ -842,7 +804,9 @@ impl Grid<'_> {
 
     /// A run of interior cells `a..b` of one row with any mix of metal and kerf:
     /// `(T + Σ min(k_P, k_S)(T_S − T))·k_loss`, in a form the compiler vectorises.
-    fn mixed_run(&self, a: usize, b: usize, out: &mut [f32], k_loss: f32) {
+    #[inline(always)]
+    fn mixed_run(&self, a: usize, b: usize, out: &mut [f32]) {
+        let k_loss = self.k_loss;
         let w = self.w;
         let (t, kc) = (self.t, self.kc);
         let n = b - a;
@@ -881,7 +845,7 @@ impl Grid<'_> {
     }
 
     /// The same for a cell off the sheet border, unrolled.
-    #[inline]
+    #[inline(always)]
     fn interior_cell(&self, i: usize) -> f32 {
         let w = self.w;
         let t = self.t;
@@ -913,6 +877,81 @@ impl Grid<'_> {
             + ki.min(kd[2]) * (d[2] - ti);
         ti + acc
     }
+}
+
+/// Updates `tiles` into `next`, the write buffer from cell index `base` on (a band of
+/// whole rows holding the tiles): the new values with `k_loss` applied and excesses below
+/// `epsilon_c` rounded to ambient. Writes each tile's new edge flags into `edges` and
+/// returns the hottest new metal excess (0 if none). Compiled for AVX2 and SSE4.2 and picked
+/// at run time (`multiversion`; no FMA, so every target gives the same bits).
+#[multiversion(targets("x86_64+avx2", "x86_64+sse4.2"))]
+fn update_tiles(
+    grid: &Grid,
+    tiles: &[usize],
+    next: &mut [f32],
+    base: usize,
+    edges: &mut [u8],
+) -> f32 {
+    let (w, h) = (grid.w, grid.h);
+    let mut max_metal = 0.0f32;
+    for (&tile, e_out) in tiles.iter().zip(edges.iter_mut()) {
+        let (tx, ty) = (tile % grid.tiles_x, tile / grid.tiles_x);
+        let (x0, y0) = (tx * TW, ty * TH);
+        let (x1, y1) = ((x0 + TW).min(w), (y0 + TH).min(h));
+        // The arithmetic is chosen per aligned BLOCK of columns (see `BLOCK`).
+        let bx0 = x0 / BLOCK * BLOCK;
+        let bx1 = (bx0 + BLOCK).min(w);
+        let interior_cols = bx0 > 0 && bx1 < w;
+        let mut e = 0u8;
+        for y in y0..y1 {
+            let border_row = y == 0 || y + 1 == h;
+            let row = y * w;
+            let out = &mut next[row + x0 - base..row + x1 - base];
+            if !border_row && interior_cols {
+                let mixed = grid.slow_block[y * grid.blocks_x + bx0 / BLOCK];
+                // Full-width tiles: a constant length the compiler unrolls.
+                match (mixed, x1 - x0 == TW) {
+                    (true, true) => grid.mixed_run(row + x0, row + x0 + TW, &mut out[..TW]),
+                    (true, false) => grid.mixed_run(row + x0, row + x1, out),
+                    (false, true) => grid.metal_run(row + x0, row + x0 + TW, &mut out[..TW]),
+                    (false, false) => grid.metal_run(row + x0, row + x1, out),
+                }
+            } else {
+                for (x, o) in (x0..x1).zip(out.iter_mut()) {
+                    let v = if border_row || x == 0 || x + 1 == w {
+                        grid.generic_cell(x, y)
+                    } else {
+                        grid.interior_cell(row + x)
+                    };
+                    *o = v * grid.k_loss;
+                }
+            }
+            // Round to ambient, track activity, hot edges and the metal maximum.
+            let (row_any, m) = if x1 - x0 == TW {
+                grid.finish_row(&mut out[..TW], &grid.air[row + x0..row + x0 + TW])
+            } else {
+                grid.finish_row(out, &grid.air[row + x0..row + x1])
+            };
+            max_metal = max_metal.max(m);
+            if row_any {
+                e |= ANY;
+                if y == y0 {
+                    e |= BOTTOM;
+                }
+                if y + 1 == y1 {
+                    e |= TOP;
+                }
+                if out[0] > 0.0 {
+                    e |= LEFT;
+                }
+                if out[out.len() - 1] > 0.0 {
+                    e |= RIGHT;
+                }
+            }
+        }
+        *e_out = e;
+    }
+    max_metal
 }
 
 /// The closed cut path of `contour` from `pierce` round and back to it: the pierce point is
