@@ -17,7 +17,9 @@
 //!    with the neighbour-list moves (iterated local search). The best order is polished with
 //!    local search once more.
 //! 3. The best surrogate plan is evaluated with the full thermal raster ([`Evaluator`]); if its
-//!    true cost is above the start's, the start is returned.
+//!    true cost is above the start's, the start is returned. If it is the start order, no
+//!    raster run is needed. [`improve_cuts_until`] takes a start order not evaluated yet and
+//!    runs its raster on a second thread alongside the search.
 //!
 //! **Surrogate** = idle length + corner penalties + (thermal cost on) a heat proxy: for every
 //! cut `b` and each of the `proxy_lookback` cuts `a` before it, `w_overheat_mm ·
@@ -854,13 +856,72 @@ pub fn improve_until(
     eval: &Evaluator,
     start: &CutPlan,
     params: &ImproveParams,
-    mut feedback: impl FnMut(Progress),
+    feedback: impl FnMut(Progress),
     stop: &dyn Fn() -> bool,
 ) -> Result<CutPlan, ParamError> {
+    if !searchable(eval, &start.cuts, params)? {
+        return Ok(start.clone());
+    }
+    let best = search(eval, &start.cuts, params, feedback, stop);
+    // The start order again: its true cost is known, no raster run needed.
+    if best == start.cuts {
+        return Ok(start.clone());
+    }
+    let plan = eval.evaluate(&best);
+    Ok(if plan.cost <= start.cost {
+        plan
+    } else {
+        start.clone()
+    })
+}
+
+/// As [`improve_until`] from a start order whose true cost is not known yet (e.g. the
+/// nearest-pierce order of [`crate::policy::construct_cuts`]): the start's raster run goes on
+/// a second thread while the search runs (the search never reads it), then the best order is
+/// evaluated unless it is the start order. Returns the evaluated start plan and the improved
+/// plan (never worse than the start). Same results as [`crate::cost::Evaluator::evaluate`]
+/// then [`improve_until`].
+///
+/// # Errors
+/// As [`improve`] (field `start.cuts`).
+pub fn improve_cuts_until(
+    eval: &Evaluator,
+    start: &[Cut],
+    params: &ImproveParams,
+    feedback: impl FnMut(Progress),
+    stop: &dyn Fn() -> bool,
+) -> Result<(CutPlan, CutPlan), ParamError> {
+    if !searchable(eval, start, params)? {
+        let plan = eval.evaluate(start);
+        return Ok((plan.clone(), plan));
+    }
+    let (start_plan, best) = std::thread::scope(|scope| {
+        let start_run = scope.spawn(|| eval.evaluate(start));
+        let best = search(eval, start, params, feedback, stop);
+        let start_plan = match start_run.join() {
+            Ok(plan) => plan,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        (start_plan, best)
+    });
+    if best == start {
+        return Ok((start_plan.clone(), start_plan));
+    }
+    let plan = eval.evaluate(&best);
+    let better = if plan.cost <= start_plan.cost {
+        plan
+    } else {
+        start_plan.clone()
+    };
+    Ok((start_plan, better))
+}
+
+/// Checks the parameters and the start order; whether there is anything to search (at least
+/// two cuts in a feasible order).
+fn searchable(eval: &Evaluator, start: &[Cut], params: &ImproveParams) -> Result<bool, ParamError> {
     params.validate()?;
     let problem = eval.problem;
-    let n = problem.contours.len();
-    if let Some(c) = start.cuts.iter().find(|c| {
+    if let Some(c) = start.iter().find(|c| {
         problem
             .contours
             .get(c.contour)
@@ -872,9 +933,21 @@ pub fn improve_until(
             reason: "names a contour or pierce candidate the problem does not have",
         });
     }
-    if start.cuts.len() < 2 || problem.precedence.check_order(&start.order()).is_err() {
-        return Ok(start.clone());
-    }
+    let order: Vec<ContourId> = start.iter().map(|c| c.contour).collect();
+    Ok(start.len() >= 2 && problem.precedence.check_order(&order).is_ok())
+}
+
+/// The search of [`improve_until`] (module docs, steps 1 and 2) from a feasible start order
+/// ([`searchable`]): the best order found, polished.
+fn search(
+    eval: &Evaluator,
+    start: &[Cut],
+    params: &ImproveParams,
+    mut feedback: impl FnMut(Progress),
+    stop: &dyn Fn() -> bool,
+) -> Vec<Cut> {
+    let problem = eval.problem;
+    let n = problem.contours.len();
     let t0 = Instant::now();
     let budget = params.time_budget_ms;
     let deadline = || stop() || (budget > 0 && t0.elapsed().as_millis() as u64 >= budget);
@@ -948,7 +1021,7 @@ pub fn improve_until(
         near,
         near_start,
         eval,
-        seq: start.cuts.clone(),
+        seq: start.to_vec(),
         pos: vec![0; n],
         group_of: problem.precedence.group_of(),
         successors,
@@ -1023,12 +1096,7 @@ pub fn improve_until(
     s.reindex(0, n - 1);
     s.local_search(params, &deadline);
     debug_assert_eq!(problem.precedence.check_order(&s.order()), Ok(()));
-    let plan = eval.evaluate(&s.seq);
-    Ok(if plan.cost <= start.cost {
-        plan
-    } else {
-        start.clone()
-    })
+    s.seq
 }
 
 #[cfg(test)]
@@ -1080,6 +1148,30 @@ mod tests {
         let b = improve(&eval, &start, &quick(), |_| {}).unwrap();
         assert_eq!(a, b);
         assert!(a.cost <= start.cost);
+    }
+
+    /// The start's raster run alongside the search gives exactly the sequential results.
+    #[test]
+    fn concurrent_start_run_matches_the_sequential_one() {
+        let problem = grid(3, 3, 58.0, true, true, PrecedenceMode::Strict);
+        let eval =
+            Evaluator::new(&problem, ThermalParams::default(), CostParams::default()).unwrap();
+        let cuts = crate::policy::construct_cuts(&eval, Policy::Nearest, 0).unwrap();
+        let start = eval.evaluate(&cuts);
+        let (start2, better2) =
+            improve_cuts_until(&eval, &cuts, &quick(), |_| {}, &|| false).unwrap();
+        assert_eq!(start2, start);
+        assert_eq!(better2, improve(&eval, &start, &quick(), |_| {}).unwrap());
+        assert!(better2.cost <= start.cost);
+        // With nothing to search, the start comes back evaluated.
+        let none = ImproveParams {
+            max_iterations: 0,
+            local_sweeps: 0,
+            ..quick()
+        };
+        let (s3, b3) = improve_cuts_until(&eval, &cuts, &none, |_| {}, &|| false).unwrap();
+        assert_eq!(s3, start);
+        assert_eq!(b3, start);
     }
 
     #[test]

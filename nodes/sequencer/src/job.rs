@@ -16,10 +16,10 @@ use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
 use crate::dxf::{read_layout, DxfError, DxfOptions};
-use crate::improve::{improve_until, ImproveParams, Progress};
+use crate::improve::{improve_cuts_until, improve_until, ImproveParams, Progress};
 use crate::layout::{Layout, LayoutError, PierceOptions};
 use crate::plan::CutPlan;
-use crate::policy::{construct, Policy};
+use crate::policy::{construct, construct_cuts, Policy};
 use crate::precedence::{PrecedenceMode, Violation};
 use crate::problem::Problem;
 use crate::thermal::{CutThermal, Frame, ParamError, ThermalParams, ThermalSim};
@@ -218,7 +218,9 @@ pub struct JobProgress {
     pub best_cost: f64,
     /// Idle length of the best plan known, mm (the construction's during the improvement).
     pub best_idle_mm: f64,
-    /// Overheats of the best plan known (the construction's during the improvement).
+    /// Overheats of the best plan known (the construction's during the improvement; 0 until
+    /// known when a policy that does not read the raster is improved: then the construction's
+    /// raster run goes alongside the search, [`crate::improve::improve_cuts_until`]).
     pub best_overheats: usize,
 }
 
@@ -326,17 +328,21 @@ pub fn run_until(
 
     progress(report(Phase::Construction, &CutPlan::default()));
     let t = Instant::now();
-    let constructed = construct(&eval, job.policy, job.seed)?;
-    phases.push(figures(Phase::Construction, t, &constructed));
-    progress(report(Phase::Construction, &constructed));
-
-    let best = if job.improve {
+    let (constructed, best) = if job.improve && !job.policy.is_thermal() {
+        // The order alone; its raster run goes alongside the improvement's search.
+        let cuts = construct_cuts(&eval, job.policy, job.seed)?;
+        let order_s = t.elapsed().as_secs_f64();
+        let order = eval.assemble(&cuts, None);
+        progress(report(Phase::Construction, &order));
         let t = Instant::now();
-        let start = report(Phase::Improvement, &constructed);
+        let start = JobProgress {
+            best_overheats: 0,
+            ..report(Phase::Improvement, &order)
+        };
         progress(start);
-        let improved = improve_until(
+        let (constructed, improved) = improve_cuts_until(
             &eval,
-            &constructed,
+            &cuts,
             &params,
             |p: Progress| {
                 progress(JobProgress {
@@ -347,10 +353,39 @@ pub fn run_until(
             },
             stop,
         )?;
+        phases.push(PhaseFigures {
+            seconds: order_s,
+            ..figures(Phase::Construction, t, &constructed)
+        });
         phases.push(figures(Phase::Improvement, t, &improved));
-        improved
+        (constructed, improved)
     } else {
-        constructed.clone()
+        let constructed = construct(&eval, job.policy, job.seed)?;
+        phases.push(figures(Phase::Construction, t, &constructed));
+        progress(report(Phase::Construction, &constructed));
+        let best = if job.improve {
+            let t = Instant::now();
+            let start = report(Phase::Improvement, &constructed);
+            progress(start);
+            let improved = improve_until(
+                &eval,
+                &constructed,
+                &params,
+                |p: Progress| {
+                    progress(JobProgress {
+                        iteration: p.iteration,
+                        best_cost: p.best_cost,
+                        ..start
+                    })
+                },
+                stop,
+            )?;
+            phases.push(figures(Phase::Improvement, t, &improved));
+            improved
+        } else {
+            constructed.clone()
+        };
+        (constructed, best)
     };
 
     let t = Instant::now();
