@@ -299,6 +299,9 @@ struct Search<'e, 'p> {
     /// `pierce_near[b][k]`: contours whose polyline passes within the overheat test's reach
     /// of candidate `k` of `b` (empty without the proxy).
     pierce_near: Vec<Vec<Vec<ContourId>>>,
+    /// `related[b]`: bit `a % 64` set for every contour `a` in `exposure[b]` or any of
+    /// `pierce_near[b]` (a quick test that the pair's proxy term is zero).
+    related: Vec<u64>,
     /// Cutting after which a kerf has cooled below `t_max`, mm (module docs).
     hot_mm: f64,
     /// Proxy charge of a pierce next to a hot kerf: one overheat plus the hot-pierce penalty.
@@ -321,6 +324,9 @@ impl<'e, 'p> Search<'e, 'p> {
     /// Heat-proxy term between contour `a`, cut `gap_mm` of cutting before `b` starts, and
     /// `b` (module docs): exposure × weight × ½^(gap / half-life).
     fn proxy_pair(&self, a: ContourId, b: Cut, gap_mm: f64) -> f64 {
+        if self.related[b.contour] & (1u64 << (a % 64)) == 0 {
+            return 0.0;
+        }
         let body = match self.exposure[b.contour].iter().find(|&&(x, _)| x == a) {
             Some(&(_, e)) => self.proxy_w * e * (-gap_mm * self.decay_per_mm).exp(),
             None => 0.0,
@@ -1023,7 +1029,20 @@ fn search(
     } else {
         f64::INFINITY
     };
+    let related = (0..n)
+        .map(|b| {
+            let mut bits = 0u64;
+            for &(a, _) in &exposure[b] {
+                bits |= 1u64 << (a % 64);
+            }
+            for &a in pierce_near.get(b).into_iter().flatten().flatten() {
+                bits |= 1u64 << (a % 64);
+            }
+            bits
+        })
+        .collect();
     let mut s = Search {
+        related,
         near,
         near_start,
         eval,
