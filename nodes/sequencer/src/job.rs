@@ -466,6 +466,46 @@ mod tests {
         assert_eq!(per_cut, out.plan.overheats);
     }
 
+    /// A policy that does not read the raster: its raster run goes alongside the search, and
+    /// the job reports the same construction as the plain one.
+    #[test]
+    fn nearest_with_improvement_reports_the_evaluated_construction() {
+        let job = SheetJob {
+            layout: LayoutSource::File(data("plate_holes_nest.json")),
+            policy: Policy::Nearest,
+            improve_params: ImproveParams {
+                max_iterations: 20,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let mut frames = 0;
+        let out = run(&job, |_| {}, 50, &mut |_| frames += 1).unwrap();
+        let eval = Evaluator::new(&out.problem, job.thermal.clone(), job.cost.clone()).unwrap();
+        assert_eq!(
+            out.constructed,
+            construct(&eval, Policy::Nearest, job.seed).unwrap()
+        );
+        assert!(
+            out.constructed.overheats > 0,
+            "the plate's nearest order overheats"
+        );
+        let kinds: Vec<Phase> = out.phases.iter().map(|p| p.phase).collect();
+        assert_eq!(
+            kinds,
+            [
+                Phase::Load,
+                Phase::Construction,
+                Phase::Improvement,
+                Phase::Simulation
+            ]
+        );
+        assert_eq!(out.phases[1].overheats, out.constructed.overheats);
+        assert!(out.plan.cost <= out.constructed.cost + 1e-9);
+        assert_eq!(out.plan, eval.evaluate(&out.plan.cuts));
+        assert!(frames > 0);
+    }
+
     #[test]
     fn bad_layouts_name_the_source_and_the_entity_or_field() {
         let job = SheetJob {
