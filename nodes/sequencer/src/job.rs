@@ -16,10 +16,10 @@ use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
 use crate::dxf::{read_layout, DxfError, DxfOptions};
-use crate::improve::{improve_until, ImproveParams, Progress};
+use crate::improve::{improve_cuts_until, improve_until, ImproveParams, Progress};
 use crate::layout::{Layout, LayoutError, PierceOptions};
 use crate::plan::CutPlan;
-use crate::policy::{construct, Policy};
+use crate::policy::{construct, construct_cuts, Policy};
 use crate::precedence::{PrecedenceMode, Violation};
 use crate::problem::Problem;
 use crate::thermal::{CutThermal, Frame, ParamError, ThermalParams, ThermalSim};
@@ -218,7 +218,9 @@ pub struct JobProgress {
     pub best_cost: f64,
     /// Idle length of the best plan known, mm (the construction's during the improvement).
     pub best_idle_mm: f64,
-    /// Overheats of the best plan known (the construction's during the improvement).
+    /// Overheats of the best plan known (the construction's during the improvement; 0 until
+    /// known when a policy that does not read the raster is improved: then the construction's
+    /// raster run goes alongside the search, [`crate::improve::improve_cuts_until`]).
     pub best_overheats: usize,
 }
 
@@ -326,17 +328,21 @@ pub fn run_until(
 
     progress(report(Phase::Construction, &CutPlan::default()));
     let t = Instant::now();
-    let constructed = construct(&eval, job.policy, job.seed)?;
-    phases.push(figures(Phase::Construction, t, &constructed));
-    progress(report(Phase::Construction, &constructed));
-
-    let best = if job.improve {
+    let (constructed, best) = if job.improve && !job.policy.is_thermal() {
+        // The order alone; its raster run goes alongside the improvement's search.
+        let cuts = construct_cuts(&eval, job.policy, job.seed)?;
+        let order_s = t.elapsed().as_secs_f64();
+        let order = eval.assemble(&cuts, None);
+        progress(report(Phase::Construction, &order));
         let t = Instant::now();
-        let start = report(Phase::Improvement, &constructed);
+        let start = JobProgress {
+            best_overheats: 0,
+            ..report(Phase::Improvement, &order)
+        };
         progress(start);
-        let improved = improve_until(
+        let (constructed, improved) = improve_cuts_until(
             &eval,
-            &constructed,
+            &cuts,
             &params,
             |p: Progress| {
                 progress(JobProgress {
@@ -347,10 +353,39 @@ pub fn run_until(
             },
             stop,
         )?;
+        phases.push(PhaseFigures {
+            seconds: order_s,
+            ..figures(Phase::Construction, t, &constructed)
+        });
         phases.push(figures(Phase::Improvement, t, &improved));
-        improved
+        (constructed, improved)
     } else {
-        constructed.clone()
+        let constructed = construct(&eval, job.policy, job.seed)?;
+        phases.push(figures(Phase::Construction, t, &constructed));
+        progress(report(Phase::Construction, &constructed));
+        let best = if job.improve {
+            let t = Instant::now();
+            let start = report(Phase::Improvement, &constructed);
+            progress(start);
+            let improved = improve_until(
+                &eval,
+                &constructed,
+                &params,
+                |p: Progress| {
+                    progress(JobProgress {
+                        iteration: p.iteration,
+                        best_cost: p.best_cost,
+                        ..start
+                    })
+                },
+                stop,
+            )?;
+            phases.push(figures(Phase::Improvement, t, &improved));
+            improved
+        } else {
+            constructed.clone()
+        };
+        (constructed, best)
     };
 
     let t = Instant::now();
@@ -429,6 +464,46 @@ mod tests {
             .map(|c| c.pierce_overheats + c.segment_overheats)
             .sum();
         assert_eq!(per_cut, out.plan.overheats);
+    }
+
+    /// A policy that does not read the raster: its raster run goes alongside the search, and
+    /// the job reports the same construction as the plain one.
+    #[test]
+    fn nearest_with_improvement_reports_the_evaluated_construction() {
+        let job = SheetJob {
+            layout: LayoutSource::File(data("plate_holes_nest.json")),
+            policy: Policy::Nearest,
+            improve_params: ImproveParams {
+                max_iterations: 20,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let mut frames = 0;
+        let out = run(&job, |_| {}, 50, &mut |_| frames += 1).unwrap();
+        let eval = Evaluator::new(&out.problem, job.thermal.clone(), job.cost.clone()).unwrap();
+        assert_eq!(
+            out.constructed,
+            construct(&eval, Policy::Nearest, job.seed).unwrap()
+        );
+        assert!(
+            out.constructed.overheats > 0,
+            "the plate's nearest order overheats"
+        );
+        let kinds: Vec<Phase> = out.phases.iter().map(|p| p.phase).collect();
+        assert_eq!(
+            kinds,
+            [
+                Phase::Load,
+                Phase::Construction,
+                Phase::Improvement,
+                Phase::Simulation
+            ]
+        );
+        assert_eq!(out.phases[1].overheats, out.constructed.overheats);
+        assert!(out.plan.cost <= out.constructed.cost + 1e-9);
+        assert_eq!(out.plan, eval.evaluate(&out.plan.cuts));
+        assert!(frames > 0);
     }
 
     #[test]

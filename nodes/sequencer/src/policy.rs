@@ -115,6 +115,16 @@ pub fn construct(eval: &Evaluator, policy: Policy, seed: u64) -> Result<CutPlan,
     })
 }
 
+/// The order `policy` builds (seed 003 §A4 `Main`) without evaluating it: for the policies
+/// that do not read the raster, no raster run at all (the improvement can then evaluate it
+/// alongside its search, [`crate::improve::improve_cuts_until`]).
+///
+/// # Errors
+/// [`Violation::Cycle`] if the rules leave contours that can never be cut.
+pub fn construct_cuts(eval: &Evaluator, policy: Policy, seed: u64) -> Result<Vec<Cut>, Violation> {
+    build(eval, policy, seed).map(|(cuts, _)| cuts)
+}
+
 /// The nearest-pierce order alone (seed 003 §A4 "shortest path"), without the raster run of
 /// its evaluation: the reference of the improvement's idle budget.
 ///
