@@ -163,12 +163,32 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         )),
         "{sheet_machine}"
     );
+    // The WAAM job: the calibration cube sliced (12 layers of 1.6 mm), emitted as ABB RAPID and
+    // run over RWS on the simulator the bridge started.
+    let waam = stdout
+        .lines()
+        .find(|l| l.contains("| waam    |"))
+        .unwrap_or_else(|| panic!("no waam row in {stdout}"));
+    assert!(waam.contains("| waam    | 12 layers, "), "{waam}");
+    let waam_program = std::fs::read_to_string(out_dir.path().join("WAAM_demo_waam.mod")).unwrap();
+    assert!(waam_program.contains("ArcLStart"), "an arc-welding program");
+    assert!(out_dir.path().join("WAAM_demo_waam.pgf").exists());
+    let waam_machine = stdout
+        .lines()
+        .find(|l| l.contains("| waam machine |"))
+        .unwrap_or_else(|| panic!("no waam machine row in {stdout}"));
+    assert!(
+        waam_machine.contains("| waam machine | finished"),
+        "{waam_machine}"
+    );
     // The recorder's bag holds the job's messages (finished: it has its summary).
     let info = cell_bag::BagInfo::open(out_dir.path().join("bag")).expect("the demo's bag reads");
     for (topic, ros_type) in [
         ("/cell/toolpath", "cell_msgs/msg/Toolpath"),
         ("/cell/machine_program", "cell_msgs/msg/MachineProgram"),
         ("/cell/machine_status", "cell_msgs/msg/MachineStatus"),
+        ("/cell/layer_stack", "cell_msgs/msg/LayerStack"),
+        ("/cell/waam_toolpath", "cell_msgs/msg/Toolpath"),
     ] {
         let t = info
             .topics
@@ -223,7 +243,13 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         info.message_count
     );
     assert!(outputs.contains(&bag_row), "{bag_row:?} not in {outputs}");
-    for file in ["cell.rrd", "bag.rrd", "demo-wing.ngc", "demo-sheet.ngc"] {
+    for file in [
+        "cell.rrd",
+        "bag.rrd",
+        "demo-wing.ngc",
+        "demo-sheet.ngc",
+        "WAAM_demo_waam.mod",
+    ] {
         let path = out_dir.path().join(file).display().to_string();
         assert!(outputs.contains(&path), "{path} not in {outputs}");
     }
@@ -251,6 +277,8 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "/sheet/heat",
         "/sheet/toolpath",
         "/machine/grbl-laser-sim/trace/0",
+        "/waam/layers/beads",
+        "/waam/stock",
     ] {
         assert!(dump.contains(entity), "cell.rrd has no {entity}");
     }

@@ -6,7 +6,11 @@
 //! 4. If `sheet_job_id` is set, does the same for a sheet: a `sequence_sheet` goal to the
 //!    sequencer (the layout embedded from `config/sheets/` or read from a file), the program an
 //!    emitter makes of its toolpath, and `execute_program`.
-//! 5. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
+//! 5. If `waam_job_id` is set, a WAAM job: a `slice` goal to the slicer (the part embedded from
+//!    `tests/data/stl/`, written to the temp directory for the slicer to read, or an STL path),
+//!    the RAPID program an emitter makes of its toolpath, and `execute_program` on the robot
+//!    controller `waam_machine_id`.
+//! 6. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
 //!    stage and why.
 //!
 //! `cell demo` runs it with a reduced iteration count and stops the other nodes once it exits.
@@ -17,7 +21,7 @@ use anyhow::{anyhow, bail, Context as _};
 use cell_msgs::{
     ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, MachineProgram,
     PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, SequenceSheetFeedback,
-    SequenceSheetGoal, SequenceSheetResult,
+    SequenceSheetGoal, SequenceSheetResult, SliceFeedback, SliceGoal, SliceResult,
 };
 use cell_runtime::action::{request_result, ActionClient, GoalStatusEnum};
 use cell_runtime::{CellNode, QosPreset};
@@ -32,6 +36,13 @@ pub const RERUN_LOG: &str = "/jobs/log";
 pub const EMBEDDED_SHEETS: &[(&str, &str)] = &[(
     "plate-nest",
     include_str!("../../../config/sheets/plate-nest.json"),
+)];
+
+/// WAAM parts shipped with the repository, embedded so the demo runs from any directory:
+/// (name, binary STL).
+pub const EMBEDDED_PARTS: &[(&str, &[u8])] = &[(
+    "20mm-xyz-cube",
+    include_bytes!("../../../tests/data/stl/20mm-xyz-cube.stl"),
 )];
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
@@ -76,6 +87,14 @@ pub struct RunnerParams {
     pub sheet_machine_profile: String,
     /// Improvement time budget of the sheet job (s).
     pub sheet_time_budget_s: f64,
+    /// Job id of the WAAM job; empty: no WAAM job.
+    pub waam_job_id: String,
+    /// WAAM part: a name in [`EMBEDDED_PARTS`] or an STL path (read by the slicer).
+    pub waam_part: String,
+    /// Layer height of the WAAM job (mm); 0: the process profile's.
+    pub waam_layer_height_mm: f64,
+    /// Robot controller for the WAAM program.
+    pub waam_machine_id: String,
 }
 
 impl Default for RunnerParams {
@@ -100,6 +119,10 @@ impl Default for RunnerParams {
             sheet_layout: "plate-nest".into(),
             sheet_machine_profile: "grbl-laser".into(),
             sheet_time_budget_s: 2.0,
+            waam_job_id: String::new(),
+            waam_part: "20mm-xyz-cube".into(),
+            waam_layer_height_mm: 0.0,
+            waam_machine_id: "abb-irb2600-waam-sim".into(),
         }
     }
 }
@@ -121,6 +144,23 @@ pub struct JobSummary {
     pub run_time: Duration,
     /// The sheet job, if one was run.
     pub sheet: Option<SheetSummary>,
+    /// The WAAM job, if one was run.
+    pub waam: Option<WaamSummary>,
+}
+
+/// What the WAAM job's stages gave, for the summary.
+#[derive(Debug, Clone, Default)]
+pub struct WaamSummary {
+    /// The slicer's result.
+    pub slice: SliceResult,
+    /// Slicing time.
+    pub slice_time: Duration,
+    /// The program.
+    pub program: MachineProgram,
+    /// The run's result.
+    pub run: ExecuteProgramResult,
+    /// Running time.
+    pub run_time: Duration,
 }
 
 /// What the sheet job's stages gave, for the summary.
@@ -211,6 +251,30 @@ impl std::fmt::Display for JobSummary {
                 run_cell(&s.run, &s.program, s.run_time)
             )?;
         }
+        if let Some(w) = &self.waam {
+            let stack = &w.slice.layer_stack;
+            let report: serde_json::Value =
+                serde_json::from_str(&w.slice.report_json).unwrap_or_default();
+            let figure = |k: &str| report[k].as_f64().unwrap_or(f64::NAN);
+            write!(
+                f,
+                "\n| waam    | {} layers, {} contours: {:.0} mm³ deposited, {:.0} s arc on, {:.0} \
+                 SEK, in {:.2} s |",
+                stack.layers.len(),
+                stack.layers.iter().map(|l| l.contours.len()).sum::<usize>(),
+                figure("deposited_volume_mm3"),
+                figure("deposition_time_s"),
+                report["cost"]["total_sek"].as_f64().unwrap_or(f64::NAN),
+                w.slice_time.as_secs_f64()
+            )?;
+            write!(f, "\n| waam program | {} |", program_cell(&w.program))?;
+            write!(
+                f,
+                "\n| waam machine | {}: RAPID ran to its end in {:.1} s |",
+                outcome_name(&w.run),
+                w.run_time.as_secs_f64()
+            )?;
+        }
         Ok(())
     }
 }
@@ -218,6 +282,7 @@ impl std::fmt::Display for JobSummary {
 type PlanClient = ActionClient<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>;
 type RunClient = ActionClient<ExecuteProgramGoal, ExecuteProgramResult, ExecuteProgramFeedback>;
 type SheetClient = ActionClient<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>;
+type SliceClient = ActionClient<SliceGoal, SliceResult, SliceFeedback>;
 
 /// Sends a goal and waits for its result, logging feedback through `describe` at most once a
 /// second.
@@ -326,6 +391,11 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     } else {
         Some(run_sheet(node, p, &mut programs, &run_client, timeout).await?)
     };
+    let waam = if p.waam_job_id.is_empty() {
+        None
+    } else {
+        Some(run_waam(node, p, &mut programs, &run_client, timeout).await?)
+    };
     Ok(JobSummary {
         iterations: last_iteration.load(std::sync::atomic::Ordering::Relaxed),
         plan,
@@ -334,6 +404,7 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
         run,
         run_time,
         sheet,
+        waam,
     })
 }
 
@@ -449,6 +520,64 @@ async fn run_sheet(
     })
 }
 
+/// The WAAM job: slice, wait for its program, run it on the robot (stage 5 of the module docs).
+async fn run_waam(
+    node: &CellNode,
+    p: &RunnerParams,
+    programs: &mut cell_runtime::Subscriber<MachineProgram>,
+    run_client: &RunClient,
+    timeout: Duration,
+) -> anyhow::Result<WaamSummary> {
+    let client: SliceClient = node.action_client("slice")?;
+    if !node.wait_for_action_server("slice", timeout).await {
+        bail!(
+            "no {} server within {timeout:?}",
+            node.resolve_topic("slice")
+        );
+    }
+    let stl_file = match EMBEDDED_PARTS.iter().find(|(name, _)| *name == p.waam_part) {
+        // The slicer reads a path; the demo's nodes share this host.
+        Some((name, bytes)) => {
+            let path = std::env::temp_dir().join(format!(
+                "cellsuite-{}-{}-{name}.stl",
+                p.waam_job_id,
+                std::process::id()
+            ));
+            std::fs::write(&path, bytes)
+                .with_context(|| format!("writing the embedded part to {}", path.display()))?;
+            path.display().to_string()
+        }
+        None => p.waam_part.clone(),
+    };
+    let goal = SliceGoal {
+        job_id: p.waam_job_id.clone(),
+        stl_file,
+        layer_height_mm: p.waam_layer_height_mm,
+        ..Default::default()
+    };
+    tracing::info!("slicing {} ({})", p.waam_job_id, p.waam_part);
+    let t0 = Instant::now();
+    let (status, slice) = follow(&client, goal, "slice", timeout, |f| {
+        format!("{}: layer {}/{}", f.phase, f.layers_done, f.layers_total)
+    })
+    .await?;
+    if status != GoalStatusEnum::Succeeded || !slice.success {
+        bail!("slice: {}", slice.message);
+    }
+    let slice_time = t0.elapsed();
+    tracing::info!("{}", slice.message);
+    let program = wait_for_program(programs, p, &p.waam_job_id, timeout).await?;
+    let t1 = Instant::now();
+    let run = execute(run_client, &program, &p.waam_machine_id, timeout).await?;
+    Ok(WaamSummary {
+        slice,
+        slice_time,
+        program,
+        run,
+        run_time: t1.elapsed(),
+    })
+}
+
 /// Runs the job, prints the summary, and returns an error unless the program ran to its end.
 ///
 /// # Errors
@@ -477,6 +606,9 @@ pub async fn run(node: CellNode, p: RunnerParams) -> anyhow::Result<()> {
             p.sheet_job_id,
             sheet.run.message
         );
+    }
+    if let Some(waam) = summary.waam.as_ref().filter(|w| !w.run.success) {
+        bail!("execute_program ({}): {}", p.waam_job_id, waam.run.message);
     }
     Ok(())
 }
