@@ -186,6 +186,83 @@ async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
     sequencer.abort();
 }
 
+/// A long improvement is cancelled after its first feedback: the goal ends as canceled within
+/// seconds (not the 600 s budget), carrying the best plan so far, and nothing goes to the
+/// emitter's topic.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_cancelled_goal_stops_improving_and_returns_the_best_plan_so_far() {
+    use futures::StreamExt;
+    let domain = fresh_domain();
+    let params = SequencerParams {
+        max_iterations: 1_000_000_000,
+        feedback_every: 1,
+        ..SequencerParams::default()
+    };
+    let sequencer = tokio::spawn(run(node("sequencer", domain, false), params));
+    let client_node = node("operator", domain, false);
+    let mut toolpaths = client_node
+        .subscriber::<Toolpath>("/toolpath", QosPreset::Plan)
+        .unwrap();
+    let client = client_node
+        .action_client::<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>(
+            "/sequence_sheet",
+        )
+        .unwrap();
+    assert!(
+        client_node
+            .wait_for_action_server("/sequence_sheet", DELIVERY_TIMEOUT)
+            .await,
+        "sequencer never discovered"
+    );
+    let file = data("plate_holes_nest.json");
+    let (goal_id, response) = within(client.async_send_goal(SequenceSheetGoal {
+        job_id: "long".into(),
+        layout_file: file.display().to_string(),
+        improve: true,
+        time_budget_s: 600.0,
+        ..Default::default()
+    }))
+    .await
+    .expect("sent");
+    assert!(response.accepted);
+    let started = std::time::Instant::now();
+    let result = cell_runtime::action::request_result(
+        &client,
+        goal_id,
+        std::time::Duration::from_secs(600),
+        std::time::Duration::from_secs(600),
+    );
+    let cancel = async {
+        let feedback = client.feedback_stream(goal_id);
+        let mut feedback = std::pin::pin!(feedback);
+        while let Some(Ok(f)) = within(feedback.next()).await {
+            if f.phase == "improvement" {
+                break;
+            }
+        }
+        client.cancel_goal(goal_id).expect("cancel sent");
+    };
+    let (result, ()) = tokio::join!(result, cancel);
+    let (status, result) = result.expect("result");
+    assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(120),
+        "cancel took {:?} (budget 600 s)",
+        started.elapsed()
+    );
+    assert!(!result.success);
+    assert!(result.message.starts_with("canceled"), "{}", result.message);
+    assert_valid_order(&problem_of(&file), &result.plan.order);
+    assert!(
+        tokio::time::timeout(std::time::Duration::from_secs(2), toolpaths.recv())
+            .await
+            .is_err(),
+        "a canceled plan must not reach the emitter"
+    );
+    assert!(!sequencer.is_finished());
+    sequencer.abort();
+}
+
 const CELL: &str = env!("CARGO_BIN_EXE_cell");
 
 #[test]

@@ -10,9 +10,11 @@
 //! published on `toolpath` (Plan QoS), the `CutPlan` on `cut_plan` (Plan QoS), everything is
 //! logged to Rerun and the result carries both. A goal that fails (a bad layout, an unknown
 //! policy, a bad parameter) ends as aborted with `success = false` and a message naming the file,
-//! entity or field; the node keeps serving. Goals run one at a time, in arrival order; the
-//! improvement phase is bounded by its time budget, so cancel requests are answered but not
-//! accepted.
+//! entity or field; the node keeps serving. Goals run one at a time, in arrival order. A cancel
+//! request for the running goal is accepted: the improvement phase stops at its next iteration
+//! (`improve_until`), the best plan so far is simulated as usual and the goal ends as canceled,
+//! its result carrying that plan (`success = false`); nothing is published for the emitter.
+//! Cancel requests for other goals are refused.
 //!
 //! Rerun entities (the suite's `/sheet/…` tree): `/sheet/heat` (the raster over the `sim_step`
 //! timeline),
@@ -310,6 +312,7 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
             Ok((sheet_job, opt)) => {
                 tracing::info!("sequence_sheet: sequencing {job_id} (seed {})", goal.seed);
                 let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
+                let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
                 let (every, frame_every, max_frames, t_max) = (
                     p.feedback_every.max(1),
                     p.frame_every_steps.max(1),
@@ -318,6 +321,7 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                 );
                 let task = {
                     let sheet_job = sheet_job.clone();
+                    let stop = stop.clone();
                     tokio::task::spawn_blocking(move || {
                         let mut frames = 0usize;
                         let ftx = tx.clone();
@@ -329,7 +333,7 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                             }
                         };
                         let mut last = None;
-                        job::run(
+                        job::run_until(
                             &sheet_job,
                             |pr| {
                                 let changed = last != Some(pr.phase);
@@ -343,10 +347,32 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                             },
                             frame_every,
                             &mut on_frame,
+                            &|| stop.load(std::sync::atomic::Ordering::Relaxed),
                         )
                     })
                 };
-                while let Some(update) = rx.recv().await {
+                let goal_id = executing.goal_id();
+                loop {
+                    let update = tokio::select! {
+                        u = rx.recv() => match u {
+                            Some(u) => u,
+                            None => break,
+                        },
+                        c = server.receive_cancel_request() => {
+                            if let Ok(c) = c {
+                                let ours = c.contains_goal(&goal_id);
+                                if ours {
+                                    tracing::info!("sequence_sheet: {job_id}: cancel requested");
+                                    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                                }
+                                let accepted = ours.then_some(goal_id).into_iter();
+                                if let Err(e) = server.respond_to_cancel_requests(&c, accepted).await {
+                                    tracing::warn!("sequence_sheet: cancel response: {e:?}");
+                                }
+                            }
+                            continue;
+                        }
+                    };
                     match update {
                         Update::Progress(pr) => {
                             if let Some(rec) = node.rerun().stream() {
@@ -402,8 +428,11 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                             out.improved,
                             sheet_job.thermal.ambient_c,
                         );
-                        toolpaths.publish(toolpath.clone()).await?;
-                        plans.publish(plan.clone()).await?;
+                        let canceled = stop.load(std::sync::atomic::Ordering::Relaxed);
+                        if !canceled {
+                            toolpaths.publish(toolpath.clone()).await?;
+                            plans.publish(plan.clone()).await?;
+                        }
                         let message = format!(
                             "sequenced {job_id}: {} contours, {}{}, idle {:.1} mm, cut {:.1} mm, \
                              {} overheats, cost {:.1} ({:.1} s)",
@@ -417,11 +446,20 @@ pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
                             out.seconds
                         );
                         log_result(&node, &out, &toolpath, &plan, &message);
+                        let message = if canceled {
+                            format!("canceled; best plan so far: {message}")
+                        } else {
+                            message
+                        };
                         tracing::info!("sequence_sheet: {message}");
                         (
-                            GoalEndStatus::Succeeded,
+                            if canceled {
+                                GoalEndStatus::Canceled
+                            } else {
+                                GoalEndStatus::Succeeded
+                            },
                             SequenceSheetResult {
-                                success: true,
+                                success: !canceled,
                                 message,
                                 plan,
                                 toolpath,
