@@ -302,7 +302,7 @@ impl<C: Context> Writable<C> for DataFrag {
     writer.write_value(&self.fragment_size)?;
     writer.write_value(&self.data_size)?;
     if self.inline_qos.is_some() && !self.inline_qos.as_ref().unwrap().parameters.is_empty() {
-      writer.write_value(self.inline_qos.as_ref().unwrap())?;
+      writer.write_value(self.inline_qos.as_ref().unwrap())?; // cellsuite: was `&self.inline_qos` (see vendor/README.md)
     }
     writer.write_bytes(&self.serialized_payload)?;
     Ok(())
