@@ -43,6 +43,28 @@ fn assert_valid_order(problem: &Problem, order: &[u32]) {
     assert_eq!(sorted, (0..problem.contours.len()).collect::<Vec<_>>());
 }
 
+type SheetClient = cell_runtime::action::ActionClient<
+    SequenceSheetGoal,
+    SequenceSheetResult,
+    SequenceSheetFeedback,
+>;
+
+/// An action client for `/sequence_sheet`, once the server is discovered.
+async fn sheet_client(client_node: &cell_runtime::CellNode) -> SheetClient {
+    let client = client_node
+        .action_client::<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>(
+            "/sequence_sheet",
+        )
+        .unwrap();
+    assert!(
+        client_node
+            .wait_for_action_server("/sequence_sheet", DELIVERY_TIMEOUT)
+            .await,
+        "sequencer never discovered"
+    );
+    client
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
     let domain = fresh_domain();
@@ -67,17 +89,7 @@ async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
     let mut heat = client_node
         .subscriber::<HeatMap>("/sheet_heat", QosPreset::Stream)
         .unwrap();
-    let client = client_node
-        .action_client::<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>(
-            "/sequence_sheet",
-        )
-        .unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/sequence_sheet", DELIVERY_TIMEOUT)
-            .await,
-        "sequencer never discovered"
-    );
+    let client = sheet_client(&client_node).await;
 
     // A broken DXF first: a result with success = false naming the file and the entities.
     let broken = data("broken_open_chain.dxf");
@@ -203,17 +215,7 @@ async fn a_cancelled_goal_stops_improving_and_returns_the_best_plan_so_far() {
     let mut toolpaths = client_node
         .subscriber::<Toolpath>("/toolpath", QosPreset::Plan)
         .unwrap();
-    let client = client_node
-        .action_client::<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>(
-            "/sequence_sheet",
-        )
-        .unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/sequence_sheet", DELIVERY_TIMEOUT)
-            .await,
-        "sequencer never discovered"
-    );
+    let client = sheet_client(&client_node).await;
     let file = data("plate_holes_nest.json");
     let (goal_id, response) = within(client.async_send_goal(SequenceSheetGoal {
         job_id: "long".into(),

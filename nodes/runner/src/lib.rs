@@ -535,8 +535,9 @@ async fn run_waam(
             node.resolve_topic("slice")
         );
     }
-    let stl_file = match EMBEDDED_PARTS.iter().find(|(name, _)| *name == p.waam_part) {
-        // The slicer reads a path; the demo's nodes share this host.
+    // The slicer reads a path; the demo's nodes share this host. The embedded part's copy is
+    // removed once the slicer has answered.
+    let (stl_file, written) = match EMBEDDED_PARTS.iter().find(|(name, _)| *name == p.waam_part) {
         Some((name, bytes)) => {
             let path = std::env::temp_dir().join(format!(
                 "cellsuite-{}-{}-{name}.stl",
@@ -545,9 +546,9 @@ async fn run_waam(
             ));
             std::fs::write(&path, bytes)
                 .with_context(|| format!("writing the embedded part to {}", path.display()))?;
-            path.display().to_string()
+            (path.display().to_string(), Some(path))
         }
-        None => p.waam_part.clone(),
+        None => (p.waam_part.clone(), None),
     };
     let goal = SliceGoal {
         job_id: p.waam_job_id.clone(),
@@ -557,10 +558,14 @@ async fn run_waam(
     };
     tracing::info!("slicing {} ({})", p.waam_job_id, p.waam_part);
     let t0 = Instant::now();
-    let (status, slice) = follow(&client, goal, "slice", timeout, |f| {
+    let followed = follow(&client, goal, "slice", timeout, |f| {
         format!("{}: layer {}/{}", f.phase, f.layers_done, f.layers_total)
     })
-    .await?;
+    .await;
+    if let Some(path) = written {
+        let _ = std::fs::remove_file(path);
+    }
+    let (status, slice) = followed?;
     if status != GoalStatusEnum::Succeeded || !slice.success {
         bail!("slice: {}", slice.message);
     }

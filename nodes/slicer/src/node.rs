@@ -479,17 +479,7 @@ async fn serve_mesh(
         }
     );
     log_outcome(cx.node, &out, &toolpath, log_stock, &message);
-    tracing::info!("slice: {message}");
-    let report_json =
-        serde_json::to_string(&out.report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
-    let result = SliceResult {
-        success: true,
-        message,
-        layer_stack: stack.clone(),
-        toolpath: toolpath.clone(),
-        report_json,
-    };
-    Ok(Ok((toolpath, stack, result)))
+    Ok(Ok(succeeded(message, stack, toolpath, &out.report)))
 }
 
 /// The wing path: design the wing, print one section (seed 002).
@@ -538,9 +528,20 @@ async fn serve_wing(
         out.report.c_l
     );
     log_wing(cx.node, &out, &toolpath, &message);
+    Ok(Ok(succeeded(message, stack, toolpath, &out.report)))
+}
+
+/// A finished goal: the summary logged, the result carrying the stack, the toolpath and the
+/// report as JSON.
+fn succeeded(
+    message: String,
+    stack: LayerStack,
+    toolpath: Toolpath,
+    report: &impl Serialize,
+) -> (Toolpath, LayerStack, SliceResult) {
     tracing::info!("slice: {message}");
     let report_json =
-        serde_json::to_string(&out.report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
+        serde_json::to_string(report).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"));
     let result = SliceResult {
         success: true,
         message,
@@ -548,7 +549,7 @@ async fn serve_wing(
         toolpath: toolpath.clone(),
         report_json,
     };
-    Ok(Ok((toolpath, stack, result)))
+    (toolpath, stack, result)
 }
 
 /// Logs a wing section: per layer (on the `layer` timeline) the perimeter, the spars and the

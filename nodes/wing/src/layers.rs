@@ -361,7 +361,7 @@ pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::section::split;
     use cell_airfoil::Airfoil;
@@ -395,7 +395,8 @@ mod tests {
         (foil.points().to_vec(), surf, planform, spars)
     }
 
-    fn params() -> BuildParams {
+    /// The build parameters the crate's unit tests share.
+    pub(crate) fn params() -> BuildParams {
         BuildParams {
             extrusion_width_mm: 0.5,
             layer_height_mm: 0.2,

@@ -65,25 +65,7 @@ mod tests {
 
     #[test]
     fn strokes_become_deposits_with_flow_and_travels_between() {
-        let p = BuildParams {
-            extrusion_width_mm: 0.5,
-            layer_height_mm: 0.2,
-            first_layer_height_mm: 0.3,
-            filament_diameter_mm: 1.75,
-            perimeter_speed_mm_s: 40.0,
-            infill_speed_mm_s: 40.0,
-            solid_infill_speed_mm_s: 60.0,
-            first_layer_speed_mm_s: 30.0,
-            travel_speed_mm_s: 80.0,
-            retract_mm: 0.8,
-            retract_speed_mm_s: 35.0,
-            z_hop_mm: 0.4,
-            spar_overlap: 0.6,
-            bed_x_mm: 220.0,
-            bed_y_mm: 220.0,
-            hinge_x_over_c: 0.8,
-            hinge_z_over_t: 1.0,
-        };
+        let p = crate::layers::tests::params();
         let stroke = |role, x: f64, z: f64, v| Stroke {
             role,
             points: vec![[x, 0.0, z], [x + 10.0, 0.0, z]],
