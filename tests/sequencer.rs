@@ -144,7 +144,7 @@ async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
     assert_valid_order(&problem, &plan.order);
     assert_eq!(plan.job_id, "nest-1");
     assert!(plan.improved);
-    assert_eq!(plan.policy, "path_overheat");
+    assert_eq!(plan.policy, "nearest");
     assert!(plan.idle_length_mm > 0.0 && plan.cut_length_mm > 0.0);
 
     let tp = &result.toolpath;
@@ -297,7 +297,7 @@ fn cell_sheet_writes_plan_program_and_report() {
         report["max_temperature_c"].as_f64(),
         Some(plan.max_temperature_c)
     );
-    assert_eq!(report["policy"], "path_overheat");
+    assert_eq!(report["policy"], "nearest");
     assert_eq!(report["improved"], true);
     let phases: Vec<&str> = report["phases"]
         .as_array()

@@ -142,7 +142,8 @@ pub struct SequenceSheetGoal {
     pub precedence: String,
     /// Pierce points: "fixed" or "free"; empty = free.
     pub pierce: String,
-    /// Construction policy: nearest, min_overheat, random, path_overheat; empty = path_overheat.
+    /// Construction policy: nearest, min_overheat, random, path_overheat, cost_greedy; empty =
+    /// the sequencer's `policy` parameter (default nearest).
     pub policy: String,
     /// Run the improvement phase after the construction.
     pub improve: bool,

@@ -38,7 +38,7 @@ pub struct SheetArgs {
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Construction policy: nearest, min_overheat, random, path_overheat, cost_greedy.
-    #[arg(long, default_value = "path_overheat")]
+    #[arg(long, default_value = "nearest")]
     pub policy: String,
     /// Precedence rules: strict (seed 003 §2) or relaxed (the paper's pseudo-code).
     #[arg(long, default_value = "strict")]

@@ -229,7 +229,7 @@ impl<'p> Evaluator<'p> {
     }
 
     /// A fresh raster of this problem's sheet, tool at the start.
-    pub fn sim(&self) -> ThermalSim<'static> {
+    pub fn sim<'f>(&self) -> ThermalSim<'f> {
         ThermalSim::new(self.problem.sheet, self.problem.start, &self.thermal)
             .expect("validated in Evaluator::new")
     }

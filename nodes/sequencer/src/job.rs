@@ -1,7 +1,10 @@
 //! One sequencing job end to end (seed 003 §A4 `Main`, notes §A6 inputs → outputs): read the
 //! layout, build the [`Problem`], construct a plan with a [`Policy`], optionally
-//! improve it ([`crate::improve::improve`]), and simulate the final plan once more on the thermal
-//! raster (seed 003 §A3), reporting raster frames. The `sequencer` node and `cell sheet` are
+//! improve it ([`crate::improve::improve`]), and simulate the final plan on the thermal raster
+//! (seed 003 §A3), reporting raster frames. When a policy that does not read the raster is
+//! improved, the best order's own raster run inside the improvement
+//! ([`crate::improve::improve_cuts_until_with`]) is that simulation: it streams the frames, and
+//! no third run is made unless the start order wins. The `sequencer` node and `cell sheet` are
 //! thin adapters around [`run`].
 //!
 //! **Pierce modes.** [`PierceMode::Fixed`]: one pierce point per contour (seed 003 §A1 `P_ij`):
@@ -16,13 +19,13 @@ use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
 use crate::dxf::{read_layout, DxfError, DxfOptions};
-use crate::improve::{improve_cuts_until, improve_until, ImproveParams, Progress};
+use crate::improve::{improve_cuts_until_with, improve_until, ImproveParams, Progress};
 use crate::layout::{Layout, LayoutError, PierceOptions};
-use crate::plan::CutPlan;
+use crate::plan::{Cut, CutPlan};
 use crate::policy::{construct, construct_cuts, Policy};
 use crate::precedence::{PrecedenceMode, Violation};
 use crate::problem::Problem;
-use crate::thermal::{CutThermal, Frame, ParamError, ThermalParams, ThermalSim};
+use crate::thermal::{CutThermal, Frame, ParamError, ThermalParams};
 
 /// Where the layout comes from.
 #[derive(Debug, Clone, PartialEq)]
@@ -128,7 +131,7 @@ impl Default for SheetJob {
             precedence: PrecedenceMode::Strict,
             pierce: PierceMode::Free,
             pierce_options: PierceOptions::default(),
-            policy: Policy::PathOverheat,
+            policy: Policy::Nearest,
             improve: true,
             improve_params: ImproveParams::default(),
             thermal: ThermalParams::default(),
@@ -296,11 +299,14 @@ pub fn run(
 /// As [`run`].
 pub fn run_until(
     job: &SheetJob,
-    mut progress: impl FnMut(JobProgress),
+    progress: impl FnMut(JobProgress),
     frame_every: u64,
     frame: &mut dyn FnMut(&Frame),
     stop: &dyn Fn() -> bool,
 ) -> Result<SheetOutcome, JobError> {
+    // Shared by the improvement's feedback and the best order's run.
+    let progress = std::cell::RefCell::new(progress);
+    let progress = |p: JobProgress| (progress.borrow_mut())(p);
     let t0 = Instant::now();
     let mut phases = Vec::new();
     let report = |phase: Phase, plan: &CutPlan| JobProgress {
@@ -328,6 +334,8 @@ pub fn run_until(
 
     progress(report(Phase::Construction, &CutPlan::default()));
     let t = Instant::now();
+    // The best plan's raster run with its per-cut figures, if the improvement already made it.
+    let mut simulated: Option<(CutPlan, Vec<CutThermal>)> = None;
     let (constructed, best) = if job.improve && !job.policy.is_thermal() {
         // The order alone; its raster run goes alongside the improvement's search.
         let cuts = construct_cuts(&eval, job.policy, job.seed)?;
@@ -340,7 +348,10 @@ pub fn run_until(
             ..report(Phase::Improvement, &order)
         };
         progress(start);
-        let (constructed, improved) = improve_cuts_until(
+        // The best order's raster run streams the frames and keeps its per-cut figures, so
+        // the final simulation below is only needed if the start order wins.
+        let mut best_run: Option<(CutPlan, Vec<CutThermal>)> = None;
+        let (constructed, improved) = improve_cuts_until_with(
             &eval,
             &cuts,
             &params,
@@ -352,7 +363,14 @@ pub fn run_until(
                 })
             },
             stop,
+            |best: &[Cut]| {
+                progress(report(Phase::Simulation, &eval.assemble(best, None)));
+                let (plan, per_cut) = simulate(&eval, best, frame_every, &mut *frame);
+                best_run = Some((plan.clone(), per_cut));
+                plan
+            },
         )?;
+        simulated = best_run.filter(|(plan, _)| *plan == improved);
         phases.push(PhaseFigures {
             seconds: order_s,
             ..figures(Phase::Construction, t, &constructed)
@@ -389,17 +407,12 @@ pub fn run_until(
     };
 
     let t = Instant::now();
-    progress(report(Phase::Simulation, &best));
-    let (plan, per_cut) = if job.cost.thermal {
-        let mut sim = ThermalSim::new(problem.sheet, problem.start, eval.thermal_params())?
-            .with_frames(frame_every.max(1), frame);
-        for c in &best.cuts {
-            sim.cut_contour(&problem.contours[c.contour], c.point(&problem));
+    let (plan, per_cut) = match simulated {
+        Some(done) => done,
+        None => {
+            progress(report(Phase::Simulation, &best));
+            simulate(&eval, &best.cuts, frame_every, frame)
         }
-        let out = sim.finish(problem.start);
-        (eval.assemble(&best.cuts, Some(&out)), out.per_cut)
-    } else {
-        (eval.assemble(&best.cuts, None), Vec::new())
     };
     phases.push(figures(Phase::Simulation, t, &plan));
     progress(report(Phase::Simulation, &plan));
@@ -412,6 +425,26 @@ pub fn run_until(
         phases,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// The raster run of `cuts` (none with thermal cost off) with frames every `frame_every`
+/// steps: the plan and its per-cut figures.
+fn simulate(
+    eval: &Evaluator,
+    cuts: &[Cut],
+    frame_every: u64,
+    frame: &mut dyn FnMut(&Frame),
+) -> (CutPlan, Vec<CutThermal>) {
+    if !eval.cost_params().thermal {
+        return (eval.assemble(cuts, None), Vec::new());
+    }
+    let problem = eval.problem;
+    let mut sim = eval.sim().with_frames(frame_every.max(1), frame);
+    for c in cuts {
+        sim.cut_contour(&problem.contours[c.contour], c.point(problem));
+    }
+    let out = sim.finish(problem.start);
+    (eval.assemble(cuts, Some(&out)), out.per_cut)
 }
 
 fn figures(phase: Phase, t: Instant, plan: &CutPlan) -> PhaseFigures {
@@ -479,8 +512,8 @@ mod tests {
             },
             ..Default::default()
         };
-        let mut frames = 0;
-        let out = run(&job, |_| {}, 50, &mut |_| frames += 1).unwrap();
+        let mut frames = Vec::new();
+        let out = run(&job, |_| {}, 50, &mut |f| frames.push(f.step)).unwrap();
         let eval = Evaluator::new(&out.problem, job.thermal.clone(), job.cost.clone()).unwrap();
         assert_eq!(
             out.constructed,
@@ -503,7 +536,12 @@ mod tests {
         assert_eq!(out.phases[1].overheats, out.constructed.overheats);
         assert!(out.plan.cost <= out.constructed.cost + 1e-9);
         assert_eq!(out.plan, eval.evaluate(&out.plan.cuts));
-        assert!(frames > 0);
+        // The improved order won, so its raster run inside the improvement streamed the
+        // frames and no other run did: one run's steps, once each.
+        assert!(out.plan.cost < out.constructed.cost);
+        let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
+        assert_eq!(frames, (1..=steps / 50).map(|k| 50 * k).collect::<Vec<_>>());
+        assert_eq!(out.per_cut.len(), out.plan.cuts.len());
     }
 
     #[test]

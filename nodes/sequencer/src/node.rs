@@ -87,7 +87,7 @@ impl Default for SequencerParams {
         SequencerParams {
             precedence: "strict".into(),
             pierce: "free".into(),
-            policy: "path_overheat".into(),
+            policy: "nearest".into(),
             time_budget_s: 5.0,
             max_iterations: ImproveParams::default().max_iterations,
             machine_profile: "linuxcnc-plasma".into(),
@@ -526,7 +526,7 @@ mod tests {
             ..Default::default()
         };
         let (job, opt) = goal_to_job(&goal, &p).unwrap();
-        assert_eq!(job.policy, crate::policy::Policy::PathOverheat);
+        assert_eq!(job.policy, crate::policy::Policy::Nearest);
         assert!(!job.improve);
         assert_eq!(job.improve_params.time_budget_ms, 5000);
         assert_eq!(opt.cut_mm_s, p.thermal.cut_speed_mm_s);
