@@ -10,7 +10,8 @@
 //! `cargo bench -p cell_sequencer --bench sequencing [-- SIZES...]` (sizes in contours, default
 //! 50 500 1000 5000; `plate` alone runs only the plate nest). `BENCH_POLICIES=0` skips the
 //! paper's policies other than nearest (quicker tuning runs); `K_LOSS`, `T_MAX_C`, `CELL_MM`
-//! and `K_C` override the thermal defaults, `PROXY_WEIGHT`, `PROXY_RADIUS` and `IDLE_BUDGET`
+//! and `K_C` override the thermal defaults (`LKH_MAX`: the most points handed to LKH-3,
+//! default 2000), `PROXY_WEIGHT`, `PROXY_RADIUS` and `IDLE_BUDGET`
 //! the improvement's (also `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS`,
 //! `MAX_ITER`).
 //!
@@ -225,6 +226,11 @@ fn thermal_params() -> ThermalParams {
 /// `LKH_PYTHON` names another interpreter, e.g. a venv's).
 fn lkh_length(problem: &Problem, plan: &CutPlan) -> Option<f64> {
     use std::io::Write;
+    // LKH-3's ten runs take minutes from a few thousand points on: skipped above LKH_MAX
+    // points (default 2000).
+    if plan.cuts.len() as f64 > env("LKH_MAX").unwrap_or(2000.0) {
+        return None;
+    }
     use std::process::{Command, Stdio};
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/lkh_peer.py");
     let python = std::env::var("LKH_PYTHON").unwrap_or_else(|_| "python3".into());

@@ -120,7 +120,11 @@ pub struct ThermalParams {
     pub overheat_radius_cells: usize,
     /// Length of the cut segments counted by the overheat metric, mm. Default 20.
     pub segment_mm: f64,
-    /// Excess below which a cell is rounded to ambient, °C. Default 1.
+    /// Excess below which a cell is rounded to ambient, °C. Default 2: a truncation far below
+    /// every threshold that counts (`t_max − delta` = 200 °C). Against 1 °C on the bench's
+    /// 1002-contour layout it leaves the overheats and the cost unchanged and the maximum
+    /// 0.9 °C lower, and updates 27 % fewer cells (2026-11-23); 4 °C starts to change the
+    /// overheat count.
     pub epsilon_c: f32,
 }
 
@@ -140,7 +144,7 @@ impl Default for ThermalParams {
             pierce_dwell_s: 0.5,
             overheat_radius_cells: 1,
             segment_mm: 20.0,
-            epsilon_c: 1.0,
+            epsilon_c: 2.0,
         }
     }
 }
@@ -349,6 +353,8 @@ pub struct ThermalSim<'a> {
     fresh: Vec<usize>,
     tiles_x: usize,
     tiles_y: usize,
+    /// Column and row of every tile (a lookup instead of a division per tile and step).
+    tile_xy: Vec<[u32; 2]>,
     active: Vec<bool>,
     /// Edge flags per tile (heat on a border: its neighbour must be updated too).
     edges: Vec<u8>,
@@ -414,6 +420,9 @@ impl<'a> ThermalSim<'a> {
             fresh: Vec::new(),
             tiles_x,
             tiles_y,
+            tile_xy: (0..tiles_x * tiles_y)
+                .map(|t| [(t % tiles_x) as u32, (t / tiles_x) as u32])
+                .collect(),
             active: vec![false; tiles_x * tiles_y],
             edges: vec![0; tiles_x * tiles_y],
             slow: vec![false; n],
@@ -561,29 +570,29 @@ impl<'a> ThermalSim<'a> {
         // holds heat (heat moves one cell per step).
         self.update_list.clear();
         let stamp = self.step;
+        let (tiles_x, tiles_y) = (self.tiles_x, self.tiles_y);
         for &tile in &self.active_list {
-            let (tx, ty) = (tile % self.tiles_x, tile / self.tiles_x);
+            let [tx, ty] = self.tile_xy[tile].map(|v| v as usize);
             let e = self.edges[tile];
-            for ny in ty.saturating_sub(1)..=(ty + 1).min(self.tiles_y - 1) {
-                for nx in tx.saturating_sub(1)..=(tx + 1).min(self.tiles_x - 1) {
-                    let need_x = match nx.cmp(&tx) {
-                        std::cmp::Ordering::Less => e & LEFT != 0,
-                        std::cmp::Ordering::Greater => e & RIGHT != 0,
-                        std::cmp::Ordering::Equal => true,
-                    };
-                    let need_y = match ny.cmp(&ty) {
-                        std::cmp::Ordering::Less => e & BOTTOM != 0,
-                        std::cmp::Ordering::Greater => e & TOP != 0,
-                        std::cmp::Ordering::Equal => true,
-                    };
-                    if !(need_x && need_y) {
-                        continue;
-                    }
-                    let n = ny * self.tiles_x + nx;
-                    if self.stamp[n] != stamp {
-                        self.stamp[n] = stamp;
-                        self.update_list.push(n);
-                    }
+            let left = e & LEFT != 0 && tx > 0;
+            let right = e & RIGHT != 0 && tx + 1 < tiles_x;
+            let below = e & BOTTOM != 0 && ty > 0;
+            let above = e & TOP != 0 && ty + 1 < tiles_y;
+            let candidates = [
+                (true, tile),
+                (left, tile.wrapping_sub(1)),
+                (right, tile + 1),
+                (below, tile.wrapping_sub(tiles_x)),
+                (above, tile + tiles_x),
+                (left && below, tile.wrapping_sub(tiles_x + 1)),
+                (right && below, tile.wrapping_sub(tiles_x).wrapping_add(1)),
+                (left && above, (tile + tiles_x).wrapping_sub(1)),
+                (right && above, tile + tiles_x + 1),
+            ];
+            for (needed, n) in candidates {
+                if needed && self.stamp[n] != stamp {
+                    self.stamp[n] = stamp;
+                    self.update_list.push(n);
                 }
             }
         }
@@ -609,7 +618,7 @@ impl<'a> ThermalSim<'a> {
             k_metal: self.params.k_conductivity,
             k_loss: self.params.k_loss,
             eps: self.params.epsilon_c,
-            tiles_x: self.tiles_x,
+            tile_xy: &self.tile_xy,
         };
         self.new_edges.clear();
         self.new_edges.resize(self.update_list.len(), 0);
@@ -624,7 +633,8 @@ impl<'a> ThermalSim<'a> {
         // are zero in the current state (inactive, no heat reaching them), so zero them.
         for &tile in &self.prev_update {
             if self.stamp[tile] != stamp {
-                let (x0, y0) = ((tile % self.tiles_x) * TW, (tile / self.tiles_x) * TH);
+                let [tx, ty] = self.tile_xy[tile].map(|v| v as usize);
+                let (x0, y0) = (tx * TW, ty * TH);
                 let (x1, y1) = ((x0 + TW).min(w), (y0 + TH).min(h));
                 for y in y0..y1 {
                     self.next[y * w + x0..y * w + x1].fill(0.0);
@@ -758,7 +768,7 @@ struct Grid<'g> {
     k_metal: f32,
     k_loss: f32,
     eps: f32,
-    tiles_x: usize,
+    tile_xy: &'g [[u32; 2]],
 }
 
 impl Grid<'_> {
@@ -907,7 +917,7 @@ fn update_tiles(grid: &Grid, tiles: &[usize], next: &mut [f32], edges: &mut [u8]
     let (w, h) = (grid.w, grid.h);
     let mut max_metal = 0.0f32;
     for (&tile, e_out) in tiles.iter().zip(edges.iter_mut()) {
-        let (tx, ty) = (tile % grid.tiles_x, tile / grid.tiles_x);
+        let [tx, ty] = grid.tile_xy[tile].map(|v| v as usize);
         let (x0, y0) = (tx * TW, ty * TH);
         let (x1, y1) = ((x0 + TW).min(w), (y0 + TH).min(h));
         // The arithmetic is chosen per aligned BLOCK of columns (see `BLOCK`).
