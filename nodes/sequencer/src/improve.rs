@@ -461,6 +461,23 @@ impl<'e, 'p> Search<'e, 'p> {
         self.proxy_sum[end] - self.proxy_sum[lo]
     }
 
+    /// The idle change of swapping the blocks `lo..split` and `split..=hi` (an Or-opt move),
+    /// from the three edges it replaces.
+    fn swap_blocks_idle_delta(&self, lo: usize, split: usize, hi: usize) -> f64 {
+        let (l, f, h) = (lo as isize, split as isize, hi as isize);
+        self.edge(l - 1, f) + self.edge(h, l) + self.edge(f - 1, h + 1)
+            - self.edge(l - 1, l)
+            - self.edge(f - 1, f)
+            - self.edge(h, h + 1)
+    }
+
+    /// The idle change of reversing `lo..=hi` (a 2-opt move): two edges replaced, the ones
+    /// inside keep their lengths.
+    fn reverse_idle_delta(&self, lo: usize, hi: usize) -> f64 {
+        let (l, h) = (lo as isize, hi as isize);
+        self.edge(l - 1, h) + self.edge(l, h + 1) - self.edge(l - 1, l) - self.edge(h, h + 1)
+    }
+
     /// Idle length of the edge from position `a` to position `b` (−1 and `n`: the start).
     fn edge(&self, a: isize, b: isize) -> f64 {
         let n = self.seq.len() as isize;
@@ -643,11 +660,7 @@ impl<'e, 'p> Search<'e, 'p> {
                 for j in (i + len)..(i + len + params.window).min(n) {
                     let (lo, hi) = (i, j);
                     // Run lo..lo+len moves after hi.
-                    let (l, f, h) = (lo as isize, (lo + len) as isize, hi as isize);
-                    let delta = self.edge(l - 1, f) + self.edge(h, l) + self.edge(f - 1, h + 1)
-                        - self.edge(l - 1, l)
-                        - self.edge(f - 1, f)
-                        - self.edge(h, h + 1);
+                    let delta = self.swap_blocks_idle_delta(lo, lo + len, hi);
                     if self.try_move(lo, hi, delta, &|s| s.rotate_left(len), &|s| {
                         s.rotate_right(len)
                     }) {
@@ -659,11 +672,7 @@ impl<'e, 'p> Search<'e, 'p> {
                 for j in i.saturating_sub(params.window)..i {
                     let (lo, hi) = (j, i + len - 1);
                     // Run hi-len+1..=hi moves before lo.
-                    let (l, f, h) = (lo as isize, (hi + 1 - len) as isize, hi as isize);
-                    let delta = self.edge(l - 1, f) + self.edge(h, l) + self.edge(f - 1, h + 1)
-                        - self.edge(l - 1, l)
-                        - self.edge(f - 1, f)
-                        - self.edge(h, h + 1);
+                    let delta = self.swap_blocks_idle_delta(lo, hi + 1 - len, hi);
                     if self.try_move(lo, hi, delta, &|s| s.rotate_right(len), &|s| {
                         s.rotate_left(len)
                     }) {
@@ -681,10 +690,7 @@ impl<'e, 'p> Search<'e, 'p> {
                 continue;
             }
             for j in (i + 1)..(i + 1 + params.window).min(n) {
-                let (l, h) = (i as isize, j as isize);
-                let delta = self.edge(l - 1, h) + self.edge(l, h + 1)
-                    - self.edge(l - 1, l)
-                    - self.edge(h, h + 1);
+                let delta = self.reverse_idle_delta(i, j);
                 if self.try_move(i, j, delta, &|s| s.reverse(), &|s| s.reverse()) {
                     self.wake_span(i, j);
                     improved = true;
@@ -1244,131 +1250,7 @@ fn search(
     let t0 = Instant::now();
     let budget = params.time_budget_ms;
     let deadline = || stop() || (budget > 0 && t0.elapsed().as_millis() as u64 >= budget);
-    let mut successors = vec![Vec::new(); n];
-    for (c, preds) in problem.precedence.predecessors.iter().enumerate() {
-        for &p in preds {
-            successors[p].push(c);
-        }
-    }
-    let bbox: Vec<[f64; 4]> = problem
-        .contours
-        .iter()
-        .map(|c| {
-            c.points
-                .iter()
-                .fold([f64::MAX, f64::MAX, f64::MIN, f64::MIN], |b, p| {
-                    [
-                        b[0].min(p[0]),
-                        b[1].min(p[1]),
-                        b[2].max(p[0]),
-                        b[3].max(p[1]),
-                    ]
-                })
-        })
-        .collect();
-    let centre = |b: &[f64; 4]| [(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0];
-    let nearest_to = |p: Point, skip: Option<usize>, k: usize| {
-        let mut d: Vec<(f64, usize)> = bbox
-            .iter()
-            .enumerate()
-            .filter(|&(j, _)| Some(j) != skip)
-            .map(|(j, b)| (dist(p, centre(b)), j))
-            .collect();
-        let k = k.min(d.len());
-        if k > 0 && k < d.len() {
-            d.select_nth_unstable_by(k - 1, |a, b| {
-                a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
-            });
-        }
-        d.truncate(k);
-        d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-        d.into_iter().map(|(_, j)| j).collect::<Vec<_>>()
-    };
-    let near = (0..n)
-        .map(|c| nearest_to(centre(&bbox[c]), Some(c), NEAR_IDLE))
-        .collect();
-    let near_start = nearest_to(problem.start, None, NEAR_IDLE);
-    let (exposure, pierce_near) = if eval.cost_params().thermal {
-        let wide: Vec<Vec<ContourId>> = (0..n)
-            .map(|c| nearest_to(centre(&bbox[c]), Some(c), PROXY_NEAR))
-            .collect();
-        let tp = eval.thermal_params();
-        let reach = (tp.overheat_radius_cells as f64 + 1.0) * tp.cell_mm;
-        (
-            exposure_table(eval, &wide, params.proxy_radius_mm),
-            pierce_table(eval, &wide, reach),
-        )
-    } else {
-        (vec![Vec::new(); n], Vec::new())
-    };
-    let tp = eval.thermal_params();
-    // Steps for a kerf at t_melt to decay below t_max by k_loss alone, as mm of cutting.
-    let hot_mm = if tp.k_loss < 1.0 {
-        f64::from((tp.t_melt_c - tp.ambient_c) / (tp.t_max_c - tp.ambient_c)).ln()
-            / -f64::from(tp.k_loss).ln()
-            * tp.cell_mm
-    } else {
-        f64::INFINITY
-    };
-    let related = (0..n)
-        .map(|b| {
-            let mut bits = 0u64;
-            for &(a, _) in &exposure[b] {
-                bits |= 1u64 << (a % 64);
-            }
-            for &a in pierce_near.get(b).into_iter().flatten().flatten() {
-                bits |= 1u64 << (a % 64);
-            }
-            bits
-        })
-        .collect();
-    let mut s = Search {
-        related,
-        near,
-        near_start,
-        eval,
-        seq: start.to_vec(),
-        pos: vec![0; n],
-        group_of: problem.precedence.group_of(),
-        successors,
-        proxy_w: if eval.cost_params().thermal {
-            eval.cost_params().w_overheat_mm * params.proxy_weight
-        } else {
-            0.0
-        },
-        cut_len: problem
-            .contours
-            .iter()
-            .map(|c| {
-                c.perimeter()
-                    + eval.thermal_params().pierce_dwell_s * eval.thermal_params().cut_speed_mm_s
-            })
-            .collect(),
-        decay_per_mm: std::f64::consts::LN_2 / params.proxy_half_life_mm,
-        exposure,
-        lookback: params.proxy_lookback,
-        idle: 0.0,
-        idle_cap: f64::INFINITY,
-        look: vec![true; n + 1],
-        examine: vec![false; n + 1],
-        look_win: vec![true; n],
-        examine_win: vec![false; n],
-        proxy_term: vec![0.0; n],
-        proxy_sum: vec![0.0; n + 1],
-        term_cache: vec![0.0; n + 1],
-        term_sum: vec![0.0; n + 2],
-        pierce_near,
-        hot_mm,
-        pierce_w: (eval.cost_params().w_overheat_mm + eval.cost_params().hot_penalty_mm)
-            * params.proxy_weight,
-    };
-    s.reindex(0, n - 1);
-    s.idle = s.span_idle(0, n - 1);
-    if eval.cost_params().thermal && params.idle_budget > 0.0 {
-        if let Ok(nn) = crate::policy::nearest_cuts(eval) {
-            s.idle_cap = params.idle_budget * crate::plan::idle_length(problem, &nn);
-        }
-    }
+    let mut s = Search::new(eval, start, params);
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     s.local_search(params, true, &deadline);
     let mut cur = s.total();
@@ -1413,6 +1295,142 @@ fn search(
     s.seq
 }
 
+impl<'e, 'p> Search<'e, 'p> {
+    /// The search state at `start` (a feasible order of `eval`'s problem): neighbour lists,
+    /// heat-proxy tables, positions and the idle budget.
+    fn new(eval: &'e Evaluator<'p>, start: &[Cut], params: &ImproveParams) -> Self {
+        let problem = eval.problem;
+        let n = problem.contours.len();
+        let mut successors = vec![Vec::new(); n];
+        for (c, preds) in problem.precedence.predecessors.iter().enumerate() {
+            for &p in preds {
+                successors[p].push(c);
+            }
+        }
+        let bbox: Vec<[f64; 4]> = problem
+            .contours
+            .iter()
+            .map(|c| {
+                c.points
+                    .iter()
+                    .fold([f64::MAX, f64::MAX, f64::MIN, f64::MIN], |b, p| {
+                        [
+                            b[0].min(p[0]),
+                            b[1].min(p[1]),
+                            b[2].max(p[0]),
+                            b[3].max(p[1]),
+                        ]
+                    })
+            })
+            .collect();
+        let centre = |b: &[f64; 4]| [(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0];
+        let nearest_to = |p: Point, skip: Option<usize>, k: usize| {
+            let mut d: Vec<(f64, usize)> = bbox
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| Some(j) != skip)
+                .map(|(j, b)| (dist(p, centre(b)), j))
+                .collect();
+            let k = k.min(d.len());
+            if k > 0 && k < d.len() {
+                d.select_nth_unstable_by(k - 1, |a, b| {
+                    a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
+                });
+            }
+            d.truncate(k);
+            d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+            d.into_iter().map(|(_, j)| j).collect::<Vec<_>>()
+        };
+        let near = (0..n)
+            .map(|c| nearest_to(centre(&bbox[c]), Some(c), NEAR_IDLE))
+            .collect();
+        let near_start = nearest_to(problem.start, None, NEAR_IDLE);
+        let (exposure, pierce_near) = if eval.cost_params().thermal {
+            let wide: Vec<Vec<ContourId>> = (0..n)
+                .map(|c| nearest_to(centre(&bbox[c]), Some(c), PROXY_NEAR))
+                .collect();
+            let tp = eval.thermal_params();
+            let reach = (tp.overheat_radius_cells as f64 + 1.0) * tp.cell_mm;
+            (
+                exposure_table(eval, &wide, params.proxy_radius_mm),
+                pierce_table(eval, &wide, reach),
+            )
+        } else {
+            (vec![Vec::new(); n], Vec::new())
+        };
+        let tp = eval.thermal_params();
+        // Steps for a kerf at t_melt to decay below t_max by k_loss alone, as mm of cutting.
+        let hot_mm = if tp.k_loss < 1.0 {
+            f64::from((tp.t_melt_c - tp.ambient_c) / (tp.t_max_c - tp.ambient_c)).ln()
+                / -f64::from(tp.k_loss).ln()
+                * tp.cell_mm
+        } else {
+            f64::INFINITY
+        };
+        let related = (0..n)
+            .map(|b| {
+                let mut bits = 0u64;
+                for &(a, _) in &exposure[b] {
+                    bits |= 1u64 << (a % 64);
+                }
+                for &a in pierce_near.get(b).into_iter().flatten().flatten() {
+                    bits |= 1u64 << (a % 64);
+                }
+                bits
+            })
+            .collect();
+        let mut s = Search {
+            related,
+            near,
+            near_start,
+            eval,
+            seq: start.to_vec(),
+            pos: vec![0; n],
+            group_of: problem.precedence.group_of(),
+            successors,
+            proxy_w: if eval.cost_params().thermal {
+                eval.cost_params().w_overheat_mm * params.proxy_weight
+            } else {
+                0.0
+            },
+            cut_len: problem
+                .contours
+                .iter()
+                .map(|c| {
+                    c.perimeter()
+                        + eval.thermal_params().pierce_dwell_s
+                            * eval.thermal_params().cut_speed_mm_s
+                })
+                .collect(),
+            decay_per_mm: std::f64::consts::LN_2 / params.proxy_half_life_mm,
+            exposure,
+            lookback: params.proxy_lookback,
+            idle: 0.0,
+            idle_cap: f64::INFINITY,
+            look: vec![true; n + 1],
+            examine: vec![false; n + 1],
+            look_win: vec![true; n],
+            examine_win: vec![false; n],
+            proxy_term: vec![0.0; n],
+            proxy_sum: vec![0.0; n + 1],
+            term_cache: vec![0.0; n + 1],
+            term_sum: vec![0.0; n + 2],
+            pierce_near,
+            hot_mm,
+            pierce_w: (eval.cost_params().w_overheat_mm + eval.cost_params().hot_penalty_mm)
+                * params.proxy_weight,
+        };
+        s.reindex(0, n - 1);
+        s.idle = s.span_idle(0, n - 1);
+        if eval.cost_params().thermal && params.idle_budget > 0.0 {
+            if let Ok(nn) = crate::policy::nearest_cuts(eval) {
+                s.idle_cap = params.idle_budget * crate::plan::idle_length(problem, &nn);
+            }
+        }
+        s
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1428,6 +1446,41 @@ mod tests {
             max_iterations: 30,
             local_sweeps: 2,
             ..Default::default()
+        }
+    }
+
+    /// The O(1) idle deltas the window sweep prunes with equal the idle change of the moves
+    /// themselves (a wrong delta would drop improving moves unseen).
+    #[test]
+    fn move_idle_deltas_match_the_moves() {
+        let problem = scattered(40, 9);
+        let eval =
+            Evaluator::new(&problem, ThermalParams::default(), CostParams::default()).unwrap();
+        let start = construct(&eval, Policy::Random, 5).unwrap();
+        let mut s = Search::new(&eval, &start.cuts, &quick());
+        let n = s.seq.len();
+        let idle = |s: &Search| s.span_idle(0, n - 1);
+        let before = idle(&s);
+        for (lo, split, hi) in [
+            (0, 1, 5),
+            (3, 6, 20),
+            (10, 13, 39),
+            (0, 20, 39),
+            (38, 39, 39),
+        ] {
+            let delta = s.swap_blocks_idle_delta(lo, split, hi);
+            s.seq[lo..=hi].rotate_left(split - lo);
+            assert!(
+                (idle(&s) - before - delta).abs() < 1e-9,
+                "{lo} {split} {hi}"
+            );
+            s.seq[lo..=hi].rotate_right(split - lo);
+        }
+        for (lo, hi) in [(0, 4), (7, 30), (20, 39), (0, 39)] {
+            let delta = s.reverse_idle_delta(lo, hi);
+            s.seq[lo..=hi].reverse();
+            assert!((idle(&s) - before - delta).abs() < 1e-9, "{lo} {hi}");
+            s.seq[lo..=hi].reverse();
         }
     }
 
