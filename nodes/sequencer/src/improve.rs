@@ -1141,6 +1141,25 @@ pub fn improve_until(
     feedback: impl FnMut(Progress),
     stop: &dyn Fn() -> bool,
 ) -> Result<CutPlan, ParamError> {
+    improve_until_with(eval, start, params, feedback, stop, |cuts| {
+        eval.evaluate(cuts)
+    })
+}
+
+/// As [`improve_until`], with the best order's evaluation left to `run_best` (as in
+/// [`improve_cuts_until_with`]): called at most once, and not when the best order is the
+/// start order.
+///
+/// # Errors
+/// As [`improve`].
+pub fn improve_until_with(
+    eval: &Evaluator,
+    start: &CutPlan,
+    params: &ImproveParams,
+    feedback: impl FnMut(Progress),
+    stop: &dyn Fn() -> bool,
+    run_best: impl FnOnce(&[Cut]) -> CutPlan,
+) -> Result<CutPlan, ParamError> {
     if !searchable(eval, &start.cuts, params)? {
         return Ok(start.clone());
     }
@@ -1149,7 +1168,7 @@ pub fn improve_until(
     if best == start.cuts {
         return Ok(start.clone());
     }
-    let plan = eval.evaluate(&best);
+    let plan = run_best(&best);
     Ok(if plan.cost <= start.cost {
         plan
     } else {
@@ -1160,8 +1179,8 @@ pub fn improve_until(
 /// As [`improve_until`] from a start order whose true cost is not known yet (e.g. the
 /// nearest-pierce order of [`crate::policy::construct_cuts`]): the start's raster run goes on
 /// a second thread alongside the search and then the best order's own run (unless the best
-/// is the start order), so the wall time is about the search plus one raster run. Returns the evaluated start plan and the improved
-/// plan (never worse than the start). Same results as [`crate::cost::Evaluator::evaluate`]
+/// is the start order), so the wall time is about the search plus one raster run. Returns
+/// the evaluated start plan and the improved plan (never worse than the start). Same results as [`crate::cost::Evaluator::evaluate`]
 /// then [`improve_until`].
 ///
 /// # Errors

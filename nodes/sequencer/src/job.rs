@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
 use crate::dxf::{read_layout, DxfError, DxfOptions};
-use crate::improve::{improve_cuts_until_with, improve_until, ImproveParams, Progress};
+use crate::improve::{improve_cuts_until_with, improve_until_with, ImproveParams, Progress};
 use crate::layout::{Layout, LayoutError, PierceOptions};
 use crate::plan::{Cut, CutPlan};
 use crate::policy::{construct, construct_cuts, Policy};
@@ -336,6 +336,15 @@ pub fn run_until(
     let t = Instant::now();
     // The best plan's raster run with its per-cut figures, if the improvement already made it.
     let mut simulated: Option<(CutPlan, Vec<CutThermal>)> = None;
+    // The improvement's run of its best order: it streams the frames and keeps its per-cut
+    // figures, so the final simulation below is only needed if the start order wins.
+    let mut best_run: Option<(CutPlan, Vec<CutThermal>)> = None;
+    let run_best = |best: &[Cut]| {
+        progress(report(Phase::Simulation, &eval.assemble(best, None)));
+        let (plan, per_cut) = simulate(&eval, best, frame_every, &mut *frame);
+        best_run = Some((plan.clone(), per_cut));
+        plan
+    };
     let (constructed, best) = if job.improve && !job.policy.is_thermal() {
         // The order alone; its raster run goes alongside the improvement's search.
         let cuts = construct_cuts(&eval, job.policy, job.seed)?;
@@ -348,9 +357,6 @@ pub fn run_until(
             ..report(Phase::Improvement, &order)
         };
         progress(start);
-        // The best order's raster run streams the frames and keeps its per-cut figures, so
-        // the final simulation below is only needed if the start order wins.
-        let mut best_run: Option<(CutPlan, Vec<CutThermal>)> = None;
         let (constructed, improved) = improve_cuts_until_with(
             &eval,
             &cuts,
@@ -363,12 +369,7 @@ pub fn run_until(
                 })
             },
             stop,
-            |best: &[Cut]| {
-                progress(report(Phase::Simulation, &eval.assemble(best, None)));
-                let (plan, per_cut) = simulate(&eval, best, frame_every, &mut *frame);
-                best_run = Some((plan.clone(), per_cut));
-                plan
-            },
+            run_best,
         )?;
         simulated = best_run.filter(|(plan, _)| *plan == improved);
         phases.push(PhaseFigures {
@@ -385,7 +386,7 @@ pub fn run_until(
             let t = Instant::now();
             let start = report(Phase::Improvement, &constructed);
             progress(start);
-            let improved = improve_until(
+            let improved = improve_until_with(
                 &eval,
                 &constructed,
                 &params,
@@ -397,7 +398,9 @@ pub fn run_until(
                     })
                 },
                 stop,
+                run_best,
             )?;
+            simulated = best_run.filter(|(plan, _)| *plan == improved);
             phases.push(figures(Phase::Improvement, t, &improved));
             improved
         } else {
@@ -473,6 +476,7 @@ mod tests {
     fn a_job_cuts_every_contour_once_in_a_valid_order_and_reports_frames() {
         let job = SheetJob {
             layout: LayoutSource::File(data("plate_holes_nest.json")),
+            policy: Policy::PathOverheat,
             improve_params: ImproveParams {
                 max_iterations: 20,
                 ..Default::default()
@@ -480,13 +484,19 @@ mod tests {
             ..Default::default()
         };
         let mut phases = Vec::new();
-        let mut frames = 0;
-        let out = run(&job, |p| phases.push(p.phase), 50, &mut |_| frames += 1).unwrap();
+        let mut frames = Vec::new();
+        let out = run(&job, |p| phases.push(p.phase), 50, &mut |f| {
+            frames.push(f.step)
+        })
+        .unwrap();
         let mut order = out.plan.order();
         out.problem.precedence.check_order(&order).unwrap();
         order.sort_unstable();
         assert_eq!(order, (0..out.problem.contours.len()).collect::<Vec<_>>());
-        assert!(frames > 0);
+        // One raster run streamed (the improvement's run of its best order, or the final
+        // simulation if there was none): its steps, once each.
+        let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
+        assert_eq!(frames, (1..=steps / 50).map(|k| 50 * k).collect::<Vec<_>>());
         assert!(phases.contains(&Phase::Improvement));
         assert_eq!(*phases.last().unwrap(), Phase::Simulation);
         assert!(out.plan.cost <= out.constructed.cost + 1e-9);
