@@ -809,56 +809,67 @@ impl Grid<'_> {
     }
 
     /// A run of interior metal cells `a..b` of one row (none next to kerf), written with
-    /// `k_loss` applied: `(T + k(Σ neighbours − 8·T))·k_loss`, in a form the compiler
-    /// vectorises.
+    /// `k_loss` applied ([`Grid::metal_row`]).
     #[inline(always)]
     fn metal_run(&self, a: usize, b: usize, out: &mut [f32]) {
-        let k_loss = self.k_loss;
-        let w = self.w;
-        let t = self.t;
+        let (w, t) = (self.w, self.t);
         let n = b - a;
-        let (u, m, d) = (
+        Self::metal_row(
             &t[a - w - 1..b - w + 1],
             &t[a - 1..b + 1],
             &t[a + w - 1..b + w + 1],
+            self.k_metal,
+            self.k_loss,
+            &mut out[..n],
         );
-        let k = self.k_metal;
+    }
+
+    /// Metal cells of one row from the rows below (`d`), at (`m`) and above (`u`), each one
+    /// cell wider on both sides: `(T + k(Σ neighbours − 8·T))·k_loss`, in a form the compiler
+    /// vectorises.
+    #[inline(always)]
+    fn metal_row(u: &[f32], m: &[f32], d: &[f32], k: f32, k_loss: f32, out: &mut [f32]) {
+        let n = out.len();
         let (u, m, d) = (&u[..n + 2], &m[..n + 2], &d[..n + 2]);
-        for (x, o) in out[..n].iter_mut().enumerate() {
+        for (x, o) in out.iter_mut().enumerate() {
             let ti = m[x + 1];
             let s = u[x] + u[x + 1] + u[x + 2] + m[x] + m[x + 2] + d[x] + d[x + 1] + d[x + 2];
             *o = (ti + k * (s - 8.0 * ti)) * k_loss;
         }
     }
 
-    /// A run of interior cells `a..b` of one row with any mix of metal and kerf:
-    /// `(T + Σ min(k_P, k_S)(T_S − T))·k_loss`, in a form the compiler vectorises.
+    /// A run of interior cells `a..b` of one row with any mix of metal and kerf, written with
+    /// `k_loss` applied ([`Grid::mixed_row`]).
     #[inline(always)]
     fn mixed_run(&self, a: usize, b: usize, out: &mut [f32]) {
-        let k_loss = self.k_loss;
-        let w = self.w;
-        let (t, kc) = (self.t, self.kc);
+        let (w, t, kc) = (self.w, self.t, self.kc);
         let n = b - a;
-        let (u, m, d) = (
-            &t[a - w - 1..b - w + 1],
-            &t[a - 1..b + 1],
-            &t[a + w - 1..b + w + 1],
+        Self::mixed_row(
+            [
+                &t[a - w - 1..b - w + 1],
+                &t[a - 1..b + 1],
+                &t[a + w - 1..b + w + 1],
+            ],
+            [
+                &kc[a - w - 1..b - w + 1],
+                &kc[a - 1..b + 1],
+                &kc[a + w - 1..b + w + 1],
+            ],
+            self.k_loss,
+            &mut out[..n],
         );
-        let (ku, km, kd) = (
-            &kc[a - w - 1..b - w + 1],
-            &kc[a - 1..b + 1],
-            &kc[a + w - 1..b + w + 1],
-        );
+    }
+
+    /// Cells of one row with any mix of metal and kerf, from the temperatures `t` and
+    /// conductivities `k` of the rows below, at and above, each one cell wider on both sides:
+    /// `(T + Σ min(k_P, k_S)(T_S − T))·k_loss`, in a form the compiler vectorises.
+    #[inline(always)]
+    fn mixed_row(t: [&[f32]; 3], k: [&[f32]; 3], k_loss: f32, out: &mut [f32]) {
+        let n = out.len();
         // Known lengths let the compiler drop the bounds checks and vectorise.
-        let (u, m, d, ku, km, kd) = (
-            &u[..n + 2],
-            &m[..n + 2],
-            &d[..n + 2],
-            &ku[..n + 2],
-            &km[..n + 2],
-            &kd[..n + 2],
-        );
-        for (x, o) in out[..n].iter_mut().enumerate() {
+        let (u, m, d) = (&t[0][..n + 2], &t[1][..n + 2], &t[2][..n + 2]);
+        let (ku, km, kd) = (&k[0][..n + 2], &k[1][..n + 2], &k[2][..n + 2]);
+        for (x, o) in out.iter_mut().enumerate() {
             let (ti, ki) = (m[x + 1], km[x + 1]);
             let f = |tj: f32, kj: f32| ki.min(kj) * (tj - ti);
             let acc = f(u[x], ku[x])
@@ -871,6 +882,59 @@ impl Grid<'_> {
                 + f(d[x + 2], kd[x + 2]);
             *o = (ti + acc) * k_loss;
         }
+    }
+
+    /// A full tile off the sheet border (`x0 ≥ 1`, `y0 ≥ 1`, one cell to spare beyond it):
+    /// its neighbourhood copied once into fixed-size arrays, every row computed, rounded and
+    /// folded there (the same arithmetic as the per-row path), each row stored once. Returns
+    /// the tile's BOTTOM/TOP edge flags.
+    #[inline(always)]
+    fn interior_tile(
+        &self,
+        x0: usize,
+        y0: usize,
+        next: &mut [f32],
+        hot: &mut [f32; TW],
+        metal_max: &mut [f32; TW],
+    ) -> u8 {
+        const W: usize = TW + 2;
+        let w = self.w;
+        let mut t = [[0.0f32; W]; TH + 2];
+        let mut k = [[0.0f32; W]; TH + 2];
+        for r in 0..TH + 2 {
+            let start = (y0 + r - 1) * w + x0 - 1;
+            t[r].copy_from_slice(&self.t[start..start + W]);
+            k[r].copy_from_slice(&self.kc[start..start + W]);
+        }
+        let mut e = 0u8;
+        for r in 0..TH {
+            let y = y0 + r;
+            let row = y * w + x0;
+            let mut v = [0.0f32; TW];
+            if self.slow_block[y * self.blocks_x + x0 / BLOCK] {
+                Self::mixed_row(
+                    [&t[r], &t[r + 1], &t[r + 2]],
+                    [&k[r], &k[r + 1], &k[r + 2]],
+                    self.k_loss,
+                    &mut v,
+                );
+            } else {
+                Self::metal_row(
+                    &t[r],
+                    &t[r + 1],
+                    &t[r + 2],
+                    self.k_metal,
+                    self.k_loss,
+                    &mut v,
+                );
+            }
+            self.finish_row(&mut v, &self.metal[row..row + TW], hot, metal_max);
+            next[row..row + TW].copy_from_slice(&v);
+            if (r == 0 || r + 1 == TH) && v.iter().any(|&x| x > 0.0) {
+                e |= if r == 0 { BOTTOM } else { TOP };
+            }
+        }
+        e
     }
 
     /// The same for a cell off the sheet border, unrolled.
@@ -927,7 +991,11 @@ fn update_tiles(grid: &Grid, tiles: &[usize], next: &mut [f32], edges: &mut [u8]
         let mut e = 0u8;
         let mut hot = [0.0f32; TW];
         let mut metal_max = [0.0f32; TW];
-        for y in y0..y1 {
+        let full_interior = interior_cols && x1 - x0 == TW && y0 > 0 && y0 + TH < h;
+        if full_interior {
+            e = grid.interior_tile(x0, y0, next, &mut hot, &mut metal_max);
+        }
+        for y in (y0..y1).filter(|_| !full_interior) {
             let border_row = y == 0 || y + 1 == h;
             let row = y * w;
             let out = &mut next[row + x0..row + x1];
