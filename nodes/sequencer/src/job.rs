@@ -1,11 +1,11 @@
 //! One sequencing job end to end (seed 003 §A4 `Main`, notes §A6 inputs → outputs): read the
 //! layout, build the [`Problem`], construct a plan with a [`Policy`], optionally
 //! improve it ([`crate::improve::improve`]), and simulate the final plan on the thermal raster
-//! (seed 003 §A3), reporting raster frames. When a policy that does not read the raster is
-//! improved, the best order's own raster run inside the improvement
-//! ([`crate::improve::improve_cuts_until_with`]) is that simulation: it streams the frames, and
-//! no third run is made unless the start order wins. The `sequencer` node and `cell sheet` are
-//! thin adapters around [`run`].
+//! (seed 003 §A3), reporting raster frames. When the improvement finds a better order, its
+//! own raster run of that order ([`crate::improve::improve_cuts_until_with`],
+//! [`crate::improve::improve_until_with`]) is that simulation and streams the frames; a
+//! separate run is made only when the start order stays. The `sequencer` node and `cell sheet`
+//! are thin adapters around [`run`].
 //!
 //! **Pierce modes.** [`PierceMode::Fixed`]: one pierce point per contour (seed 003 §A1 `P_ij`):
 //! the layout's where it gives one, else the single best free candidate
