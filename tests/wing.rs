@@ -13,27 +13,6 @@ fn repo(path: &str) -> String {
         .to_string()
 }
 
-/// Filament pushed by the moves that go somewhere (absolute E, M82; retract and prime lines
-/// are E-only and cancel out).
-fn extruded_mm(gcode: &str) -> f64 {
-    let (mut total, mut prev) = (0.0, 0.0);
-    for line in gcode.lines().filter(|l| l.starts_with('G')) {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let Some(e) = words.iter().find_map(|w| w.strip_prefix('E')) else {
-            continue;
-        };
-        let e: f64 = e.parse().unwrap();
-        if words
-            .iter()
-            .any(|w| w.starts_with('X') || w.starts_with('Y'))
-        {
-            total += e - prev;
-        }
-        prev = e;
-    }
-    total
-}
-
 #[test]
 fn cell_wing_writes_one_marlin_program_per_section_and_a_report() {
     let dir = tempfile::tempdir().unwrap();
@@ -68,7 +47,7 @@ fn cell_wing_writes_one_marlin_program_per_section_and_a_report() {
         );
         assert!(gcode.contains("M82"), "absolute extrusion");
         let volume = s["deposited_volume_mm3"].as_f64().unwrap();
-        let e = extruded_mm(&gcode);
+        let e = cell_emitter::gcode::extruded_length_mm(&gcode);
         assert!(
             (e - volume / filament_area).abs() < 0.01 * volume / filament_area,
             "{}: E {e:.3} mm for {volume:.1} mm³",

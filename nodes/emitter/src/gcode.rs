@@ -82,6 +82,47 @@ pub fn max_line_length(dialect: Dialect) -> usize {
     }
 }
 
+/// Filament the deposit moves of an extrusion program push, mm: the E of every `G` line that
+/// also names X or Y, in the mode the program sets (`M82` absolute, the default, or `M83`
+/// relative). E-only lines (retract and prime) move filament without depositing and are left
+/// out; `G92 E…` sets the absolute origin. For checks and reports of programs this module
+/// writes (seed 002: E = deposited volume / filament cross-section).
+///
+/// # Panics
+/// Never; an E word that is not a number counts as 0.
+pub fn extruded_length_mm(program: &str) -> f64 {
+    let (mut total, mut at, mut relative) = (0.0, 0.0, false);
+    for line in program.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.first().copied() {
+            Some("M82") => relative = false,
+            Some("M83") => relative = true,
+            Some(g) if g.starts_with('G') => {
+                let Some(e) = words.iter().find_map(|w| w.strip_prefix('E')) else {
+                    continue;
+                };
+                let e: f64 = e.parse().unwrap_or(0.0);
+                if g == "G92" {
+                    at = e;
+                    continue;
+                }
+                let moves = words
+                    .iter()
+                    .any(|w| w.starts_with('X') || w.starts_with('Y'));
+                let pushed = if relative { e } else { e - at };
+                if moves {
+                    total += pushed;
+                }
+                if !relative {
+                    at = e;
+                }
+            }
+            _ => {}
+        }
+    }
+    total
+}
+
 /// The G-code program for `toolpath` on `profile` (module docs). `job_id` goes into the header
 /// comment, sanitised.
 ///
@@ -793,6 +834,17 @@ pub fn sanitise(text: &str) -> String {
 mod tests {
     use super::*;
     use cell_msgs::geometry_msgs::Point;
+
+    #[test]
+    fn extruded_length_counts_deposit_moves_in_either_mode() {
+        // Absolute: a retract and prime around a travel, then a reset origin.
+        let absolute = "M82\nG1 X1 Y0 E1.5 F600\nG1 E0.7\nG0 X5 Y5\nG1 E1.5\n\
+                        G1 X6 Y5 E2.0\nG92 E0\nG1 X7 Y5 E0.25\n";
+        assert!((extruded_length_mm(absolute) - 2.25).abs() < 1e-12);
+        let relative = "M83\nG1 X1 Y0 E1.5\nG1 E-0.8\nG0 X5 Y5\nG1 E0.8\nG1 X6 E0.5\n";
+        assert!((extruded_length_mm(relative) - 2.0).abs() < 1e-12);
+        assert_eq!(extruded_length_mm("; nothing\nG0 X1\n"), 0.0);
+    }
 
     fn seg(kind: u8, pts: &[(f64, f64)], feed: f32, power: f32) -> ToolpathSegment {
         ToolpathSegment {

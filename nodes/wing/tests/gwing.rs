@@ -165,26 +165,7 @@ fn marlin_gcode_extrudes_the_deposited_volume() {
     let profile = MachineProfile::load(repo("config/machines/marlin-extruder.yaml")).unwrap();
     let gcode =
         cell_emitter::gcode::emit(&tp, &profile, "gwing-test").unwrap_or_else(|e| panic!("{e}"));
-    // Sum E over the moves that go somewhere (retract/prime lines are E-only and cancel).
-    let mut e_total = 0.0;
-    let mut e_prev = 0.0;
-    for line in gcode.lines() {
-        if !line.starts_with('G') {
-            continue; // comments, M-codes
-        }
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let Some(e) = words.iter().find_map(|w| w.strip_prefix('E')) else {
-            continue;
-        };
-        let e: f64 = e.parse().unwrap();
-        if words
-            .iter()
-            .any(|w| w.starts_with('X') || w.starts_with('Y'))
-        {
-            e_total += e - e_prev;
-        }
-        e_prev = e;
-    }
+    let e_total = cell_emitter::gcode::extruded_length_mm(&gcode);
     let expect = deposited_volume_mm3(&layers, 0.5) / filament_area_mm2(&p);
     eprintln!("Marlin E {e_total:.4} mm, volume / filament area {expect:.4} mm");
     assert!(
