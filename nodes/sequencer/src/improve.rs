@@ -386,13 +386,23 @@ impl<'e, 'p> Search<'e, 'p> {
     /// Surrogate terms owned by position `i` (0..=n; n is the return to start): the idle
     /// edge into it, its corner penalty and its heat-proxy look-back.
     fn term(&self, i: usize) -> f64 {
-        let n = self.seq.len();
+        let proxy = if i < self.seq.len() {
+            self.proxy_at(i)
+        } else {
+            0.0
+        };
+        self.term_without_proxy(i) + proxy
+    }
+
+    /// [`Search::term`] without its heat-proxy part: the idle edge into position `i` and its
+    /// corner penalty.
+    fn term_without_proxy(&self, i: usize) -> f64 {
         let prev = if i == 0 { usize::MAX } else { i - 1 };
-        let mut t = dist(self.point(prev), self.point(i));
-        if i < n {
-            t += self.eval.corner_penalty(self.seq[i]) + self.proxy_at(i);
+        let edge = dist(self.point(prev), self.point(i));
+        match self.seq.get(i) {
+            Some(&c) => edge + self.eval.corner_penalty(c),
+            None => edge,
         }
-        t
     }
 
     /// The heat-proxy look-back of position `i < n` (part of [`Search::term`]).
@@ -410,43 +420,44 @@ impl<'e, 'p> Search<'e, 'p> {
         t
     }
 
-    /// Recomputes the cached proxy terms of positions `lo..=hi + lookback` and the prefix
-    /// sums from `lo` on (after a change of `lo..=hi`).
-    fn refresh_proxy(&mut self, lo: usize, hi: usize) {
+    /// Recomputes the cached terms (and their proxy parts) that a change of `lo..=hi` touches,
+    /// positions `lo..=`[`Search::span_end`]`(hi)`, and the prefix sums from `lo` on.
+    fn refresh_cache(&mut self, lo: usize, hi: usize) {
         let n = self.seq.len();
         if n == 0 {
             return;
         }
-        let end = (hi + 1 + self.lookback).min(n);
-        for i in lo..=end {
-            self.term_cache[i] = self.term(i);
+        for i in lo..=self.span_end(hi) {
+            let proxy = if i < n { self.proxy_at(i) } else { 0.0 };
+            if i < n {
+                self.proxy_term[i] = proxy;
+            }
+            self.term_cache[i] = self.term_without_proxy(i) + proxy;
         }
         for i in lo..=n {
             self.term_sum[i + 1] = self.term_sum[i] + self.term_cache[i];
-        }
-        if self.proxy_w == 0.0 {
-            return;
-        }
-        for i in lo..=(hi + self.lookback).min(n - 1) {
-            self.proxy_term[i] = self.proxy_at(i);
         }
         for i in lo..n {
             self.proxy_sum[i + 1] = self.proxy_sum[i] + self.proxy_term[i];
         }
     }
 
+    /// The last position whose term changes when positions `lo..=hi` are permuted (`n`: the
+    /// return to start): the edge out of `hi` and the look-back of the cuts after it.
+    fn span_end(&self, hi: usize) -> usize {
+        (hi + 1 + self.lookback).min(self.seq.len())
+    }
+
     /// The cached [`Search::span_cost`] of `lo..=hi` (valid inside [`Search::sweep`]).
     fn cached_span_cost(&self, lo: usize, hi: usize) -> f64 {
-        let end = (hi + 1 + self.lookback).min(self.seq.len());
-        self.term_sum[end + 1] - self.term_sum[lo]
+        self.term_sum[self.span_end(hi) + 1] - self.term_sum[lo]
     }
 
     /// Whether [`Search::span_cost`] of `lo..=hi` is below `limit`, stopping as soon as the
     /// partial sum reaches it (every term is ≥ 0).
     fn span_cost_below(&self, lo: usize, hi: usize, limit: f64) -> bool {
-        let end = (hi + 1 + self.lookback).min(self.seq.len());
         let mut sum = 0.0;
-        for i in lo..=end {
+        for i in lo..=self.span_end(hi) {
             sum += self.term(i);
             if sum >= limit {
                 return false;
@@ -455,10 +466,12 @@ impl<'e, 'p> Search<'e, 'p> {
         true
     }
 
-    /// The cached proxy of the terms [`Search::span_cost`] sums for `lo..=hi`.
+    /// The cached proxy a move of `lo..=hi` could at best remove (the proxy parts of the terms
+    /// [`Search::span_cost`] sums, but the last).
     fn span_proxy(&self, lo: usize, hi: usize) -> f64 {
-        let end = (hi + 1 + self.lookback).min(self.seq.len());
-        self.proxy_sum[end] - self.proxy_sum[lo]
+        // Positions lo..span_end(hi): the last term's look-back lies wholly after hi, so its
+        // proxy cannot change.
+        self.proxy_sum[self.span_end(hi)] - self.proxy_sum[lo]
     }
 
     /// The idle change of swapping the blocks `lo..split` and `split..=hi` (an Or-opt move),
@@ -487,8 +500,7 @@ impl<'e, 'p> Search<'e, 'p> {
 
     /// Sum of the terms that change when positions `lo..=hi` are permuted.
     fn span_cost(&self, lo: usize, hi: usize) -> f64 {
-        let end = (hi + 1 + self.lookback).min(self.seq.len());
-        (lo..=end).map(|i| self.term(i)).sum()
+        (lo..=self.span_end(hi)).map(|i| self.term(i)).sum()
     }
 
     fn total(&self) -> f64 {
@@ -580,7 +592,7 @@ impl<'e, 'p> Search<'e, 'p> {
                 self.budget_ok(idle_before, after)
             };
             if kept {
-                self.refresh_proxy(lo, hi);
+                self.refresh_cache(lo, hi);
                 return true;
             }
         }
@@ -611,7 +623,7 @@ impl<'e, 'p> Search<'e, 'p> {
         let mut improved = false;
         std::mem::swap(&mut self.look_win, &mut self.examine_win);
         self.look_win.fill(false);
-        self.refresh_proxy(0, n.saturating_sub(1));
+        self.refresh_cache(0, n.saturating_sub(1));
         // Pierce re-selection.
         for i in 0..n {
             if !self.to_examine_win(i) {
@@ -641,7 +653,7 @@ impl<'e, 'p> Search<'e, 'p> {
                     idle_before
                 };
                 if cheaper && (!self.capped() || self.budget_ok(idle_before, after)) {
-                    self.refresh_proxy(i, i);
+                    self.refresh_cache(i, i);
                     self.wake_span(i, i);
                     improved = true;
                 } else {
@@ -772,6 +784,16 @@ impl<'e, 'p> Search<'e, 'p> {
         }
     }
 
+    /// Sets the don't-look bits around contour `c` (`n`, past the last contour: the start),
+    /// as [`Search::wake`] does at its position.
+    fn wake_contour(&mut self, c: ContourId) {
+        if c < self.seq.len() {
+            self.wake(self.pos[c] as isize);
+        } else {
+            self.wake(-1);
+        }
+    }
+
     /// Whether the contour at position `i` (−1: the start) is to be examined this sweep.
     fn to_examine(&self, i: isize) -> bool {
         let c = if i < 0 {
@@ -856,21 +878,16 @@ impl<'e, 'p> Search<'e, 'p> {
                     self.pt(if i + len == n { -1 } else { i + len }),
                 );
                 let gain = dist(pp, pf) + dist(pl, pn) - dist(pp, pn);
+                // The contour at a position (−1 and `n`: the start, as index `n`).
+                let contour_at = |s: &Self, p: isize| {
+                    if p < 0 || p >= n {
+                        n as usize
+                    } else {
+                        s.seq[p as usize].contour
+                    }
+                };
                 // The contours at the ends of the edges a move here changes.
-                let ends = [
-                    self.seq[i as usize].contour,
-                    self.seq[(i + len - 1) as usize].contour,
-                    if i == 0 {
-                        usize::MAX
-                    } else {
-                        self.seq[(i - 1) as usize].contour
-                    },
-                    if i + len == n {
-                        usize::MAX
-                    } else {
-                        self.seq[(i + len) as usize].contour
-                    },
-                ];
+                let ends = [i, i + len - 1, i - 1, i + len].map(|p| contour_at(self, p));
                 let mut done = false;
                 for t in 0..self.near[first].len() {
                     let v = self.near[first][t];
@@ -887,14 +904,7 @@ impl<'e, 'p> Search<'e, 'p> {
                             continue;
                         }
                         let l = len as usize;
-                        let contour_at = |p: isize| {
-                            if p < 0 || p >= n {
-                                usize::MAX
-                            } else {
-                                self.seq[p as usize].contour
-                            }
-                        };
-                        let q_ends = [contour_at(q), contour_at(q + 1)];
+                        let q_ends = [q, q + 1].map(|p| contour_at(self, p));
                         let ok = if q > i {
                             let (lo, hi) = (i as usize, q as usize);
                             self.commit_if_feasible(
@@ -935,13 +945,8 @@ impl<'e, 'p> Search<'e, 'p> {
                             )
                         };
                         if ok {
-                            let start = self.look.len() - 1;
                             for c in ends.into_iter().chain(q_ends) {
-                                if c == usize::MAX {
-                                    self.look[start] = true;
-                                } else {
-                                    self.wake(self.pos[c] as isize);
-                                }
+                                self.wake_contour(c);
                             }
                             improved = true;
                             done = true;
@@ -1089,9 +1094,8 @@ impl<'e, 'p> Search<'e, 'p> {
             self.reindex(0, n - 1);
             return false;
         }
-        // Wake the ends of every edge the step changed (for both sweeps).
-        let start = self.look.len() - 1;
-        let at = |seq: &[Cut], i: usize| seq.get(i).map_or(start, |c| c.contour);
+        // Wake the ends of every edge the step changed (for both sweeps); `n` is the start.
+        let at = |seq: &[Cut], i: usize| seq.get(i).map_or(n, |c| c.contour);
         let mut changed: Vec<usize> = Vec::with_capacity(3 * out.len() + 2 * removed.len());
         for &i in &removed {
             changed.push(at(&saved, i.wrapping_sub(1)));
@@ -1104,11 +1108,7 @@ impl<'e, 'p> Search<'e, 'p> {
             }
         }
         for c in changed {
-            if c == start {
-                self.look[start] = true;
-            } else {
-                self.wake(self.pos[c] as isize);
-            }
+            self.wake_contour(c);
         }
         true
     }
@@ -1180,8 +1180,8 @@ pub fn improve_until_with(
 /// nearest-pierce order of [`crate::policy::construct_cuts`]): the start's raster run goes on
 /// a second thread alongside the search and then the best order's own run (unless the best
 /// is the start order), so the wall time is about the search plus one raster run. Returns
-/// the evaluated start plan and the improved plan (never worse than the start). Same results as [`crate::cost::Evaluator::evaluate`]
-/// then [`improve_until`].
+/// the evaluated start plan and the improved plan (never worse than the start). Same results
+/// as [`crate::cost::Evaluator::evaluate`] then [`improve_until`].
 ///
 /// # Errors
 /// As [`improve`] (field `start.cuts`).
