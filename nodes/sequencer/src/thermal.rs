@@ -932,9 +932,48 @@ impl Grid<'_> {
             }
             self.finish_row(&mut v, &self.metal[row..row + TW], hot, metal_max);
             next[row..row + TW].copy_from_slice(&v);
-            if (r == 0 || r + 1 == TH) && v.iter().any(|&x| x > 0.0) {
-                e |= if r == 0 { BOTTOM } else { TOP };
+            e |= end_row_flags(r == 0, r + 1 == TH, &v);
+        }
+        e
+    }
+
+    /// Any other tile (at the sheet border, or cut short by it), row by row: interior runs
+    /// through the row kernels, border cells through [`Grid::generic_cell`]; rounded and folded
+    /// as in [`Grid::interior_tile`]. Returns the tile's BOTTOM/TOP edge flags.
+    #[inline(always)]
+    fn edge_tile(
+        &self,
+        [x0, x1]: [usize; 2],
+        [y0, y1]: [usize; 2],
+        interior_cols: bool,
+        next: &mut [f32],
+        hot: &mut [f32; TW],
+        metal_max: &mut [f32; TW],
+    ) -> u8 {
+        let (w, h) = (self.w, self.h);
+        let mut e = 0u8;
+        for y in y0..y1 {
+            let border_row = y == 0 || y + 1 == h;
+            let row = y * w;
+            let out = &mut next[row + x0..row + x1];
+            if !border_row && interior_cols {
+                if self.slow_block[y * self.blocks_x + x0 / BLOCK] {
+                    self.mixed_run(row + x0, row + x1, out);
+                } else {
+                    self.metal_run(row + x0, row + x1, out);
+                }
+            } else {
+                for (x, o) in (x0..x1).zip(out.iter_mut()) {
+                    let v = if border_row || x == 0 || x + 1 == w {
+                        self.generic_cell(x, y)
+                    } else {
+                        self.interior_cell(row + x)
+                    };
+                    *o = v * self.k_loss;
+                }
             }
+            self.finish_row(out, &self.metal[row + x0..row + x1], hot, metal_max);
+            e |= end_row_flags(y == y0, y + 1 == y1, out);
         }
         e
     }
@@ -974,6 +1013,17 @@ impl Grid<'_> {
     }
 }
 
+/// BOTTOM if `first` and TOP if `last` (a tile's first and last row), when the finished row
+/// holds heat.
+#[inline(always)]
+fn end_row_flags(first: bool, last: bool, row: &[f32]) -> u8 {
+    if (first || last) && row.iter().any(|&v| v > 0.0) {
+        (if first { BOTTOM } else { 0 }) | (if last { TOP } else { 0 })
+    } else {
+        0
+    }
+}
+
 /// Updates `tiles` into the write buffer `next`: the new values with `k_loss` applied and excesses below
 /// `epsilon_c` rounded to ambient. Writes each tile's new edge flags into `edges` and
 /// returns the hottest new metal excess (0 if none). Compiled for AVX2 and SSE4.2 and picked
@@ -990,66 +1040,20 @@ fn update_tiles(grid: &Grid, tiles: &[usize], next: &mut [f32], edges: &mut [u8]
         let bx0 = x0 / BLOCK * BLOCK;
         let bx1 = (bx0 + BLOCK).min(w);
         let interior_cols = bx0 > 0 && bx1 < w;
-        let mut e = 0u8;
         let mut hot = [0.0f32; TW];
         let mut metal_max = [0.0f32; TW];
-        let full_interior = interior_cols && x1 - x0 == TW && y0 > 0 && y0 + TH < h;
-        if full_interior {
-            e = grid.interior_tile(x0, y0, next, &mut hot, &mut metal_max);
-        }
-        for y in (y0..y1).filter(|_| !full_interior) {
-            let border_row = y == 0 || y + 1 == h;
-            let row = y * w;
-            let out = &mut next[row + x0..row + x1];
-            if !border_row && interior_cols && x1 - x0 == TW {
-                // Full-width interior row: computed, rounded and folded in registers, then
-                // stored once.
-                let mut v = [0.0f32; TW];
-                if grid.slow_block[y * grid.blocks_x + bx0 / BLOCK] {
-                    grid.mixed_run(row + x0, row + x0 + TW, &mut v);
-                } else {
-                    grid.metal_run(row + x0, row + x0 + TW, &mut v);
-                }
-                grid.finish_row(
-                    &mut v,
-                    &grid.metal[row + x0..row + x0 + TW],
-                    &mut hot,
-                    &mut metal_max,
-                );
-                out.copy_from_slice(&v);
-            } else {
-                if !border_row && interior_cols {
-                    if grid.slow_block[y * grid.blocks_x + bx0 / BLOCK] {
-                        grid.mixed_run(row + x0, row + x1, out);
-                    } else {
-                        grid.metal_run(row + x0, row + x1, out);
-                    }
-                } else {
-                    for (x, o) in (x0..x1).zip(out.iter_mut()) {
-                        let v = if border_row || x == 0 || x + 1 == w {
-                            grid.generic_cell(x, y)
-                        } else {
-                            grid.interior_cell(row + x)
-                        };
-                        *o = v * grid.k_loss;
-                    }
-                }
-                grid.finish_row(
-                    out,
-                    &grid.metal[row + x0..row + x1],
-                    &mut hot,
-                    &mut metal_max,
-                );
-            }
-            if (y == y0 || y + 1 == y1) && out.iter().any(|&v| v > 0.0) {
-                if y == y0 {
-                    e |= BOTTOM;
-                }
-                if y + 1 == y1 {
-                    e |= TOP;
-                }
-            }
-        }
+        let mut e = if interior_cols && x1 - x0 == TW && y0 > 0 && y0 + TH < h {
+            grid.interior_tile(x0, y0, next, &mut hot, &mut metal_max)
+        } else {
+            grid.edge_tile(
+                [x0, x1],
+                [y0, y1],
+                interior_cols,
+                next,
+                &mut hot,
+                &mut metal_max,
+            )
+        };
         let tile_w = x1 - x0;
         if hot[..tile_w].iter().any(|&v| v > 0.0) {
             e |= ANY;
