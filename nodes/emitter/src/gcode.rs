@@ -85,11 +85,9 @@ pub fn max_line_length(dialect: Dialect) -> usize {
 /// Filament the deposit moves of an extrusion program push, mm: the E of every `G` line that
 /// also names X or Y, in the mode the program sets (`M82` absolute, the default, or `M83`
 /// relative). E-only lines (retract and prime) move filament without depositing and are left
-/// out; `G92 E…` sets the absolute origin. For checks and reports of programs this module
-/// writes (seed 002: E = deposited volume / filament cross-section).
-///
-/// # Panics
-/// Never; an E word that is not a number counts as 0.
+/// out; `G92 E…` sets the absolute origin; an E word that is not a number counts as 0. For
+/// checks and reports of programs this module writes (seed 002: E = deposited volume /
+/// filament cross-section).
 pub fn extruded_length_mm(program: &str) -> f64 {
     let (mut total, mut at, mut relative) = (0.0, 0.0, false);
     for line in program.lines() {

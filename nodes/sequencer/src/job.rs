@@ -472,17 +472,30 @@ mod tests {
         .join(name)
     }
 
-    #[test]
-    fn a_job_cuts_every_contour_once_in_a_valid_order_and_reports_frames() {
-        let job = SheetJob {
+    /// The plate nest with `policy` and a short improvement.
+    fn plate_job(policy: Policy) -> SheetJob {
+        SheetJob {
             layout: LayoutSource::File(data("plate_holes_nest.json")),
-            policy: Policy::PathOverheat,
+            policy,
             improve_params: ImproveParams {
                 max_iterations: 20,
                 ..Default::default()
             },
             ..Default::default()
-        };
+        }
+    }
+
+    /// The frames of one raster run of `out`'s plan at `every` steps: its steps, once each
+    /// (a second run would start over).
+    fn assert_one_run_of_frames(out: &SheetOutcome, job: &SheetJob, frames: &[u64], every: u64) {
+        let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
+        let expected: Vec<u64> = (1..=steps / every).map(|k| every * k).collect();
+        assert_eq!(frames, expected);
+    }
+
+    #[test]
+    fn a_job_cuts_every_contour_once_in_a_valid_order_and_reports_frames() {
+        let job = plate_job(Policy::PathOverheat);
         let mut phases = Vec::new();
         let mut frames = Vec::new();
         let out = run(&job, |p| phases.push(p.phase), 50, &mut |f| {
@@ -494,9 +507,8 @@ mod tests {
         order.sort_unstable();
         assert_eq!(order, (0..out.problem.contours.len()).collect::<Vec<_>>());
         // One raster run streamed (the improvement's run of its best order, or the final
-        // simulation if there was none): its steps, once each.
-        let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
-        assert_eq!(frames, (1..=steps / 50).map(|k| 50 * k).collect::<Vec<_>>());
+        // simulation if there was none).
+        assert_one_run_of_frames(&out, &job, &frames, 50);
         assert!(phases.contains(&Phase::Improvement));
         assert_eq!(*phases.last().unwrap(), Phase::Simulation);
         assert!(out.plan.cost <= out.constructed.cost + 1e-9);
@@ -513,15 +525,7 @@ mod tests {
     /// the job reports the same construction as the plain one.
     #[test]
     fn nearest_with_improvement_reports_the_evaluated_construction() {
-        let job = SheetJob {
-            layout: LayoutSource::File(data("plate_holes_nest.json")),
-            policy: Policy::Nearest,
-            improve_params: ImproveParams {
-                max_iterations: 20,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
+        let job = plate_job(Policy::Nearest);
         let mut frames = Vec::new();
         let out = run(&job, |_| {}, 50, &mut |f| frames.push(f.step)).unwrap();
         let eval = Evaluator::new(&out.problem, job.thermal.clone(), job.cost.clone()).unwrap();
@@ -547,10 +551,9 @@ mod tests {
         assert!(out.plan.cost <= out.constructed.cost + 1e-9);
         assert_eq!(out.plan, eval.evaluate(&out.plan.cuts));
         // The improved order won, so its raster run inside the improvement streamed the
-        // frames and no other run did: one run's steps, once each.
+        // frames and no other run did.
         assert!(out.plan.cost < out.constructed.cost);
-        let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
-        assert_eq!(frames, (1..=steps / 50).map(|k| 50 * k).collect::<Vec<_>>());
+        assert_one_run_of_frames(&out, &job, &frames, 50);
         assert_eq!(out.per_cut.len(), out.plan.cuts.len());
     }
 
