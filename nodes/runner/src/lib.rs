@@ -337,12 +337,7 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     let run_client: RunClient = node.action_client("execute_program")?;
     let mut programs = node.subscriber::<MachineProgram>(&p.program_topic, QosPreset::Plan)?;
     for action in ["plan_hotwire", "execute_program"] {
-        if !node.wait_for_action_server(action, timeout).await {
-            bail!(
-                "no {} server within {timeout:?}",
-                node.resolve_topic(action)
-            );
-        }
+        require_action_server(node, action, timeout).await?;
     }
 
     let goal = PlanHotwireGoal {
@@ -462,6 +457,22 @@ async fn execute(
     Ok(run)
 }
 
+/// Waits up to `timeout` for the `action` server; an error naming its resolved name if none
+/// comes.
+async fn require_action_server(
+    node: &CellNode,
+    action: &str,
+    timeout: Duration,
+) -> anyhow::Result<()> {
+    if !node.wait_for_action_server(action, timeout).await {
+        bail!(
+            "no {} server within {timeout:?}",
+            node.resolve_topic(action)
+        );
+    }
+    Ok(())
+}
+
 /// The sheet job: sequence, wait for its program, run it (stage 4 of the module docs).
 async fn run_sheet(
     node: &CellNode,
@@ -471,12 +482,7 @@ async fn run_sheet(
     timeout: Duration,
 ) -> anyhow::Result<SheetSummary> {
     let client: SheetClient = node.action_client("sequence_sheet")?;
-    if !node.wait_for_action_server("sequence_sheet", timeout).await {
-        bail!(
-            "no {} server within {timeout:?}",
-            node.resolve_topic("sequence_sheet")
-        );
-    }
+    require_action_server(node, "sequence_sheet", timeout).await?;
     let (layout_file, layout_json) = match EMBEDDED_SHEETS
         .iter()
         .find(|(name, _)| *name == p.sheet_layout)
@@ -529,12 +535,7 @@ async fn run_waam(
     timeout: Duration,
 ) -> anyhow::Result<WaamSummary> {
     let client: SliceClient = node.action_client("slice")?;
-    if !node.wait_for_action_server("slice", timeout).await {
-        bail!(
-            "no {} server within {timeout:?}",
-            node.resolve_topic("slice")
-        );
-    }
+    require_action_server(node, "slice", timeout).await?;
     // The slicer reads a path; the demo's nodes share this host. The embedded part's copy is
     // removed once the slicer has answered.
     let (stl_file, written) = match EMBEDDED_PARTS.iter().find(|(name, _)| *name == p.waam_part) {
