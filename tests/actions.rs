@@ -100,3 +100,71 @@ async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
     assert_eq!(result.toolpath, block);
     within(serve).await.expect("server done");
 }
+
+/// A result the client takes only after its server has gone still arrives. The server answers
+/// and is dropped at once, which is what a node ending its last goal does; the client's DDS
+/// reader then learns that the server's writers left before the client reads. rustdds 0.15.1
+/// hid every sample it held from a writer that had left, so this result never arrived (see
+/// `vendor/README.md`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_result_read_after_its_server_left_still_arrives() {
+    let domain = fresh_domain();
+    let server_node = node("planner", domain, false);
+    let client_node = node("operator", domain, false);
+    let server = server_node
+        .action_server::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
+        .unwrap();
+    let client = client_node
+        .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
+        .unwrap();
+
+    let block = test_block(&ProbeParams::default());
+    let served = block.clone();
+    let serve = tokio::spawn(async move {
+        let handle = server.receive_new_goal().await.expect("goal");
+        let accepted = server.accept_goal(handle).await.expect("accept");
+        let executing = server
+            .start_executing_goal(accepted)
+            .await
+            .expect("execute");
+        let result = PlanHotwireResult {
+            success: true,
+            message: "planned wing-8".into(),
+            toolpath: served,
+            ..Default::default()
+        };
+        server
+            .send_result_response(executing, GoalEndStatus::Succeeded, result)
+            .await
+            .expect("result");
+        // `server` is dropped here: its writers leave the graph right after the answer.
+    });
+
+    assert!(
+        client_node
+            .wait_for_action_server("/plan_hotwire", DELIVERY_TIMEOUT)
+            .await,
+        "server never discovered"
+    );
+    let goal = PlanHotwireGoal {
+        job_id: "wing-8".into(),
+        root_chord_mm: 200.0,
+        ..Default::default()
+    };
+    let (goal_id, response) = within(client.async_send_goal(goal)).await.expect("sent");
+    assert!(response.accepted);
+    // Ask for the result but do not read yet.
+    let request = client.request_result(goal_id).expect("result requested");
+    within(serve).await.expect("server answered and left");
+    // Loopback discovery reports the writers gone within milliseconds; on a slower machine
+    // the test may read before that, and then passes without exercising the loss.
+    tokio::time::sleep(std::time::Duration::from_secs(2)).await;
+
+    let answer = within(client.result_client().async_receive_response(request))
+        .await
+        .expect("the result arrives after its server left, and decodes");
+    assert_eq!(answer.status, GoalStatusEnum::Succeeded);
+    assert_eq!(answer.result.message, "planned wing-8");
+    assert_eq!(answer.result.toolpath, block);
+    drop(server_node);
+}

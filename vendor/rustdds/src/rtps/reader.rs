@@ -468,9 +468,13 @@ impl Reader {
   pub fn remove_writer_proxy(&mut self, writer_guid: GUID) {
     if self.matched_writers.contains_key(&writer_guid) {
       self.matched_writers.remove(&writer_guid);
-      self
+      let handed_over = self
         .acquire_the_topic_cache_guard()
         .forget_reliable_writer(writer_guid);
+      // cellsuite: wake a DataReader waiting for the samples just handed over.
+      if handed_over {
+        self.notify_cache_change();
+      }
       #[cfg(feature = "security")]
       if let Some(security_plugins_handle) = &self.security_plugins {
         security_plugins_handle

@@ -242,8 +242,24 @@ impl TopicCache {
   }
 
   // The Writer is gone, so samples it never completed are no longer awaited.
-  pub fn forget_reliable_writer(&mut self, writer: GUID) {
-    self.received_reliably_before.remove(&writer);
+  // cellsuite: was only `self.received_reliably_before.remove(&writer);`, which
+  // put the marker back to the first SequenceNumber and so hid every sample
+  // received from the Writer but not yet taken (see vendor/README.md). Now the
+  // marker moves past the last sample present, handing them all over. Returns
+  // true if that made samples available, so the Reader can wake its DataReader.
+  pub fn forget_reliable_writer(&mut self, writer: GUID) -> bool {
+    let after_last_present = self
+      .sequence_numbers
+      .get(&writer)
+      .and_then(|sns| sns.keys().next_back())
+      .map(|sn| sn.plus_1());
+    match after_last_present {
+      Some(after) => self.mark_reliably_received_before(writer, after),
+      None => {
+        self.received_reliably_before.remove(&writer);
+        false
+      }
+    }
   }
 
   // The oldest change that a Reliable DataReader cannot yet take, because an
