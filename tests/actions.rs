@@ -6,20 +6,41 @@ mod common;
 
 use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
 use cell_probe::{test_block, ProbeParams};
-use cell_runtime::action::{GoalEndStatus, GoalStatusEnum};
+use cell_runtime::action::{ActionClient, AsyncActionServer, GoalEndStatus, GoalStatusEnum};
+use cell_runtime::CellNode;
 use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
+/// A `planner` node serving `/plan_hotwire` and an `operator` node with a client for it, on a
+/// fresh domain.
+struct Pair {
+    server_node: CellNode,
+    client_node: CellNode,
+    server: AsyncActionServer<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>,
+    client: ActionClient<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>,
+}
+
+fn planner_and_operator() -> Pair {
     let domain = fresh_domain();
     let server_node = node("planner", domain, false);
     let client_node = node("operator", domain, false);
-    let server = server_node
-        .action_server::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
-        .unwrap();
-    let client = client_node
-        .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
-        .unwrap();
+    let server = server_node.action_server("/plan_hotwire").unwrap();
+    let client = client_node.action_client("/plan_hotwire").unwrap();
+    Pair {
+        server_node,
+        client_node,
+        server,
+        client,
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
+    let Pair {
+        server_node: _server_node,
+        client_node,
+        server,
+        client,
+    } = planner_and_operator();
 
     let block = test_block(&ProbeParams::default());
     let served = block.clone();
@@ -108,15 +129,12 @@ async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
 /// `vendor/README.md`).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_result_read_after_its_server_left_still_arrives() {
-    let domain = fresh_domain();
-    let server_node = node("planner", domain, false);
-    let client_node = node("operator", domain, false);
-    let server = server_node
-        .action_server::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
-        .unwrap();
-    let client = client_node
-        .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
-        .unwrap();
+    let Pair {
+        server_node,
+        client_node,
+        server,
+        client,
+    } = planner_and_operator();
 
     let block = test_block(&ProbeParams::default());
     let served = block.clone();
