@@ -8,7 +8,7 @@ use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
 use cell_probe::{test_block, ProbeParams};
 use cell_runtime::action::{ActionClient, AsyncActionServer, GoalEndStatus, GoalStatusEnum};
 use cell_runtime::CellNode;
-use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
+use common::{discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal};
 
 /// A `planner` node serving `/plan_hotwire` and an `operator` node with a client for it, on a
 /// fresh domain.
@@ -93,12 +93,7 @@ async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
         ..Default::default()
     };
 
-    assert!(
-        client_node
-            .wait_for_action_server("/plan_hotwire", DELIVERY_TIMEOUT)
-            .await,
-        "server never discovered"
-    );
+    discover_action_server(&client_node, "/plan_hotwire").await;
     assert!(
         follow_goal(&client, goal(-1.0)).await.is_none(),
         "a goal with a negative chord must be rejected"
@@ -158,12 +153,7 @@ async fn a_result_read_after_its_server_left_still_arrives() {
         // `server` is dropped here: its writers leave the graph right after the answer.
     });
 
-    assert!(
-        client_node
-            .wait_for_action_server("/plan_hotwire", DELIVERY_TIMEOUT)
-            .await,
-        "server never discovered"
-    );
+    discover_action_server(&client_node, "/plan_hotwire").await;
     let goal = PlanHotwireGoal {
         job_id: "wing-8".into(),
         root_chord_mm: 200.0,

@@ -23,7 +23,7 @@ use cell_msgs::{
 use cell_profiles::MachineProfile;
 use cell_runtime::action::ActionClient;
 use cell_runtime::{CellNode, QosPreset, Subscriber};
-use common::{fresh_domain, node, within, DELIVERY_TIMEOUT};
+use common::{discover_action_server, fresh_domain, node, within, DELIVERY_TIMEOUT};
 use futures::StreamExt;
 
 type Client = ActionClient<ExecuteProgramGoal, R, ExecuteProgramFeedback>;
@@ -151,11 +151,7 @@ async fn operator(domain: u16) -> Operator {
     let status = node
         .subscriber::<MachineStatus>("/machine_status", QosPreset::Status)
         .unwrap();
-    assert!(
-        node.wait_for_action_server("/execute_program", DELIVERY_TIMEOUT)
-            .await,
-        "bridge never discovered"
-    );
+    discover_action_server(&node, "/execute_program").await;
     Operator {
         node,
         client,

@@ -15,7 +15,7 @@ use cell_msgs::{
 };
 use cell_profiles::MachineProfile;
 use cell_runtime::QosPreset;
-use common::{follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
+use common::{discover_action_server, follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
 
 /// A closed 100 × 70 mm rectangle cut inside grbl-xy's travel, with a lead-in.
 fn rectangle(job_id: &str) -> Toolpath {
@@ -250,11 +250,7 @@ async fn planner_and_emitter_turn_a_goal_into_a_program() {
     let client = client_node
         .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
         .unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/plan_hotwire", DELIVERY_TIMEOUT)
-            .await
-    );
+    discover_action_server(&client_node, "/plan_hotwire").await;
     let goal = PlanHotwireGoal {
         job_id: "wing-7".into(),
         root_airfoil: "s1223".into(),

@@ -9,7 +9,9 @@ use cell_msgs::{
 };
 use cell_planner::node::{run, PlannerParams};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
-use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
+use common::{
+    discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT,
+};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
@@ -35,12 +37,7 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
     let client = client_node
         .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("/plan_hotwire")
         .unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/plan_hotwire", DELIVERY_TIMEOUT)
-            .await,
-        "planner never discovered"
-    );
+    discover_action_server(&client_node, "/plan_hotwire").await;
 
     let goal = |chord: f64, job: &str| PlanHotwireGoal {
         job_id: job.into(),

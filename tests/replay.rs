@@ -26,7 +26,7 @@ use cell_planner::node::PlannerParams;
 use cell_recorder::RecorderParams;
 use cell_replayer::{Replay, ReplaySummary, ReplayerParams};
 use cell_runtime::{action::GoalStatusEnum, CellNode, NodeSetup, QosPreset, Shutdown};
-use common::{follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
+use common::{discover_action_server, follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
 
 /// A bag's first log time (any fixed epoch time).
 const T0_NS: u64 = 1_763_800_000_000_000_000;
@@ -149,12 +149,7 @@ async fn a_recorded_cell_run_replays_to_the_same_program_and_the_same_executed_l
     let client = operator
         .action_client::<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>("plan_hotwire")
         .unwrap();
-    assert!(
-        operator
-            .wait_for_action_server("plan_hotwire", DELIVERY_TIMEOUT)
-            .await,
-        "planner never discovered"
-    );
+    discover_action_server(&operator, "plan_hotwire").await;
     let goal = PlanHotwireGoal {
         job_id: "replay-wing".into(),
         root_airfoil: "s1223".into(),

@@ -18,7 +18,7 @@ use cell_sequencer::{
     node::{run, SequencerParams},
     problem::Problem,
 };
-use common::{follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT};
+use common::{discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -56,12 +56,7 @@ async fn sheet_client(client_node: &cell_runtime::CellNode) -> SheetClient {
             "/sequence_sheet",
         )
         .unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/sequence_sheet", DELIVERY_TIMEOUT)
-            .await,
-        "sequencer never discovered"
-    );
+    discover_action_server(client_node, "/sequence_sheet").await;
     client
 }
 

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use cell_msgs::{LayerStack, SliceFeedback, SliceGoal, SliceResult, Toolpath, ToolpathSegment};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
 use cell_slicer::node::{run, SlicerParams};
-use common::{within, DELIVERY_TIMEOUT};
+use common::{discover_action_server, within, DELIVERY_TIMEOUT};
 use futures::StreamExt;
 
 fn stl(name: &str) -> PathBuf {
@@ -75,12 +75,7 @@ async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_b
     let client = client_node
         .action_client::<SliceGoal, SliceResult, SliceFeedback>("/slice")
         .unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/slice", DELIVERY_TIMEOUT)
-            .await,
-        "slicer never discovered"
-    );
+    discover_action_server(&client_node, "/slice").await;
 
     // A broken mesh first: success = false naming the file.
     let (_, status, result) = slice(

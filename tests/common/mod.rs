@@ -38,6 +38,15 @@ pub async fn within<F: std::future::Future>(f: F) -> F::Output {
         .expect("in time")
 }
 
+/// Waits until `client` has discovered the action server `name`, failing the test if that takes
+/// longer than [`DELIVERY_TIMEOUT`]. Send goals only after this (goals sent earlier are lost).
+pub async fn discover_action_server(client: &CellNode, name: &str) {
+    assert!(
+        client.wait_for_action_server(name, DELIVERY_TIMEOUT).await,
+        "action server {name} never discovered"
+    );
+}
+
 /// What an action client saw of one accepted goal.
 pub struct FollowedGoal<F, R> {
     /// The first feedback message.
