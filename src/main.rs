@@ -1,5 +1,5 @@
-//! The `cell` binary; see [`cell_cli`].
+//! The `cell` binary; see [`cellsuite`].
 
 fn main() -> std::process::ExitCode {
-    cell_cli::main(std::env::args().collect())
+    cellsuite::main(std::env::args().collect())
 }

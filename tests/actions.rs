@@ -5,7 +5,7 @@
 mod common;
 
 use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
-use cell_probe::{test_block, ProbeParams};
+use probe::{test_block, ProbeParams};
 use cell_runtime::action::{ActionClient, AsyncActionServer, GoalEndStatus, GoalStatusEnum};
 use cell_runtime::CellNode;
 use common::{discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal};

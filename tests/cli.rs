@@ -199,35 +199,41 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         assert!(t.message_count > 0, "{info}");
     }
     // Two independent decoders (PyPI mcap + mcap-ros2-support, rosbags' AnyReader) decode
-    // every message of every topic; check_bag.py fails on any error.
-    let python = common::venv_python("bag-venv", "nodes/bag/tests/py/requirements.txt", "rosbags");
-    let check = Command::new(&python)
-        .arg(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/nodes/bag/tests/py/check_bag.py"
-        ))
-        .arg(out_dir.path().join("bag"))
-        .output()
-        .expect("run check_bag.py");
-    assert!(
-        check.status.success(),
-        "check_bag.py: {}",
-        text(&check.stderr)
-    );
-    for reader in ["mcap", "rosbags"] {
-        let decoded: Vec<serde_json::Value> = text(&check.stdout)
-            .lines()
-            .map(|l| serde_json::from_str(l).expect("JSON line"))
-            .filter(|v: &serde_json::Value| v["reader"] == reader)
-            .collect();
-        assert_eq!(
-            decoded.len() as u64,
-            info.message_count,
-            "{reader} decoded every message"
+    // every message of every topic; check_bag.py fails on any error. (Skipped, with a line
+    // saying so, when the venv cannot be made; under CI that fails.)
+    if let Some(python) = common::venv_python(
+        "bag-venv",
+        "crates/bag/tests/py/requirements.txt",
+        "rosbags",
+    ) {
+        let check = Command::new(&python)
+            .arg(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/crates/bag/tests/py/check_bag.py"
+            ))
+            .arg(out_dir.path().join("bag"))
+            .output()
+            .expect("run check_bag.py");
+        assert!(
+            check.status.success(),
+            "check_bag.py: {}",
+            text(&check.stderr)
         );
-        for t in &info.topics {
-            let n = decoded.iter().filter(|v| v["topic"] == t.name).count() as u64;
-            assert_eq!(n, t.message_count, "{reader}: {}", t.name);
+        for reader in ["mcap", "rosbags"] {
+            let decoded: Vec<serde_json::Value> = text(&check.stdout)
+                .lines()
+                .map(|l| serde_json::from_str(l).expect("JSON line"))
+                .filter(|v: &serde_json::Value| v["reader"] == reader)
+                .collect();
+            assert_eq!(
+                decoded.len() as u64,
+                info.message_count,
+                "{reader} decoded every message"
+            );
+            for t in &info.topics {
+                let n = decoded.iter().filter(|v| v["topic"] == t.name).count() as u64;
+                assert_eq!(n, t.message_count, "{reader}: {}", t.name);
+            }
         }
     }
     // The last thing printed: what the demo wrote, after job_runner's table.
@@ -386,7 +392,7 @@ fn shipped_params_files_are_valid() {
     let out = cell(
         &[
             "node",
-            "cell_probe",
+            "probe",
             "--ros-args",
             "--params-file",
             probe.to_str().unwrap(),
@@ -405,7 +411,7 @@ fn a_node_dying_at_start_fails_the_launch_loudly() {
     std::fs::write(
         &file,
         "launch:\n- node: {pkg: cellsuite, exec: monitor, name: watcher, param: [{name: timeout_s, value: 600.0}]}\n\
-         - node: {pkg: cellsuite, exec: cell_probe, name: broken, param: [{name: no_such_param, value: 1}]}\n",
+         - node: {pkg: cellsuite, exec: probe, name: broken, param: [{name: no_such_param, value: 1}]}\n",
     )
     .unwrap();
     let started = std::time::Instant::now();
@@ -444,7 +450,7 @@ fn ros_domain_id_separates_cells() {
         cell(
             &[
                 "node",
-                "cell_probe",
+                "probe",
                 "--dds-network",
                 "loopback",
                 "--ros-args",

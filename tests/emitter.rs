@@ -8,7 +8,7 @@ mod common;
 
 use std::process::{Command, Output};
 
-use cell_emitter::node::{run, EmitterParams};
+use emitter::{run, EmitterParams};
 use cell_msgs::{
     geometry_msgs::Point, EmitProgramRequest, EmitProgramResponse, MachineProgram,
     PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath, ToolpathSegment,
@@ -234,9 +234,9 @@ async fn planner_and_emitter_turn_a_goal_into_a_program() {
     let planner_node = node("planner", domain, false);
     let emitter_node = node("emitter", domain, false);
     let client_node = node("operator", domain, false);
-    let planner = tokio::spawn(cell_planner::node::run(
+    let planner = tokio::spawn(planner::run(
         planner_node,
-        cell_planner::node::PlannerParams {
+        planner::PlannerParams {
             panels: 40,
             particles: 6,
             feedback_every: 5,

@@ -1,7 +1,9 @@
 //! Two hosts, simulated by two network namespaces joined by a veth pair: a probe on one and a
 //! monitor on the other discover each other over DDS (multicast SPDP on the veth link) and
 //! exchange a Toolpath and heat maps. Needs root and iproute2 (CI has both); elsewhere the test
-//! says why it did not run, and under CI it fails instead.
+//! says why it did not run, and under CI it fails instead ([`common::require_tool`]).
+
+mod common;
 
 use std::process::{Command, Output};
 
@@ -46,12 +48,11 @@ fn can_make_namespaces() -> Result<(), String> {
 
 #[test]
 fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
-    if let Err(why) = can_make_namespaces() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must run the multi-host test as root: {why}"
-        );
-        eprintln!("skipping the multi-host test: cannot create network namespaces ({why})");
+    if !common::require_tool(
+        "root and iproute2 (network namespaces)",
+        can_make_namespaces(),
+        "run the tests as root; `scripts/test` installs iproute2",
+    ) {
         return;
     }
     let id = std::process::id() % 10_000;
@@ -108,7 +109,7 @@ fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
     let mut probe = node(
         &ns_a,
         &addr_a,
-        "cell_probe",
+        "probe",
         &[
             "wait_for_subscribers:=1",
             "wait_timeout_s:=60.0",

@@ -3,7 +3,7 @@
 
 mod common;
 
-use cell_monitor::MonitorParams;
+use monitor::MonitorParams;
 use cell_runtime::{args::NodeArgs, CellNode, NodeSetup};
 use common::{fresh_domain, DELIVERY_TIMEOUT};
 use ros2_client::{

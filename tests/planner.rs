@@ -7,7 +7,7 @@ mod common;
 use cell_msgs::{
     HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath, ToolpathSegment,
 };
-use cell_planner::node::{run, PlannerParams};
+use planner::{run, PlannerParams};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
 use common::{
     discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT,

@@ -8,10 +8,10 @@ use std::time::Duration;
 
 use cell_bag::BagReader;
 use cell_msgs::{HeatMap, MachineStatus, Toolpath};
-use cell_probe::{test_block, ProbeParams};
-use cell_recorder::{run, RecorderParams};
 use cell_runtime::{CellNode, NodeSetup, QosPreset};
 use common::{fresh_domain, node, within, DELIVERY_TIMEOUT};
+use probe::{test_block, ProbeParams};
+use recorder::{run, RecorderParams};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_recorder_writes_what_was_published_and_third_party_readers_agree() {
@@ -119,10 +119,16 @@ async fn the_recorder_writes_what_was_published_and_third_party_readers_agree() 
     }
 
     // Independent readers decode the whole bag.
-    let python = common::venv_python("bag-venv", "nodes/bag/tests/py/requirements.txt", "rosbags");
+    let Some(python) = common::venv_python(
+        "bag-venv",
+        "crates/bag/tests/py/requirements.txt",
+        "rosbags",
+    ) else {
+        return;
+    };
     let script = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/nodes/bag/tests/py/check_bag.py"
+        "/crates/bag/tests/py/check_bag.py"
     );
     let out = std::process::Command::new(&python)
         .arg(script)

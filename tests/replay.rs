@@ -13,8 +13,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use cell_bag::{BagWriter, QosProfile};
-use cell_bridge::node::BridgeParams;
-use cell_emitter::node::EmitterParams;
+use machine_bridge::BridgeParams;
+use emitter::EmitterParams;
 use cell_grbl::program::{CleanOptions, Program};
 use cell_grbl::sim::{self, SimConfig, SimHandle};
 use cell_msgs::std_msgs::StringMsg;
@@ -22,9 +22,9 @@ use cell_msgs::std_srvs::{SetBoolRequest, SetBoolResponse};
 use cell_msgs::{
     MachineProgram, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, RosMessage, Toolpath,
 };
-use cell_planner::node::PlannerParams;
-use cell_recorder::RecorderParams;
-use cell_replayer::{Replay, ReplaySummary, ReplayerParams};
+use planner::PlannerParams;
+use recorder::RecorderParams;
+use replayer::{Replay, ReplaySummary, ReplayerParams};
 use cell_runtime::{action::GoalStatusEnum, CellNode, NodeSetup, QosPreset, Shutdown};
 use common::{discover_action_server, follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
 
@@ -89,7 +89,7 @@ async fn executed(sim: &SimHandle, n: usize) -> Vec<String> {
 /// `launch_scripts/hotwire.launch.yaml` wires them.
 fn emitter_and_bridge(domain: u16, controller: String) -> Vec<Shutdown> {
     let (emitter, emitter_stop) = ns_node("emitter", "/cell", domain);
-    tokio::spawn(cell_emitter::node::run(
+    tokio::spawn(emitter::run(
         emitter,
         EmitterParams {
             machine_profile: "grbl-xyuv".into(),
@@ -97,7 +97,7 @@ fn emitter_and_bridge(domain: u16, controller: String) -> Vec<Shutdown> {
         },
     ));
     let (bridge, bridge_stop) = ns_node("machine_bridge", "/cell", domain);
-    tokio::spawn(cell_bridge::node::run(
+    tokio::spawn(machine_bridge::run(
         bridge,
         BridgeParams {
             controllers: vec![controller],
@@ -118,7 +118,7 @@ async fn a_recorded_cell_run_replays_to_the_same_program_and_the_same_executed_l
     let domain = fresh_domain();
     let (sim_a, controller_a) = grbl_sim(dir.path(), "cutter").await;
     let (recorder, recorder_stop) = ns_node("recorder", "/cell", domain);
-    let recording = tokio::spawn(cell_recorder::run(
+    let recording = tokio::spawn(recorder::run(
         recorder,
         RecorderParams {
             output: bag.display().to_string(),
@@ -128,7 +128,7 @@ async fn a_recorded_cell_run_replays_to_the_same_program_and_the_same_executed_l
         },
     ));
     let (planner, planner_stop) = ns_node("planner", "/cell", domain);
-    tokio::spawn(cell_planner::node::run(
+    tokio::spawn(planner::run(
         planner,
         PlannerParams {
             machine_profile: "grbl-xyuv".into(),
@@ -196,7 +196,7 @@ async fn a_recorded_cell_run_replays_to_the_same_program_and_the_same_executed_l
         .subscriber::<MachineProgram>("machine_program", QosPreset::Plan)
         .unwrap();
     let (replayer, _) = ns_node("replayer", "/cell", domain);
-    let replaying = tokio::spawn(cell_replayer::run(
+    let replaying = tokio::spawn(replayer::run(
         replayer,
         ReplayerParams {
             bag: bag.display().to_string(),

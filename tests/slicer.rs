@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use cell_msgs::{LayerStack, SliceFeedback, SliceGoal, SliceResult, Toolpath, ToolpathSegment};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
-use cell_slicer::node::{run, SlicerParams};
+use slicer::{run, SlicerParams};
 use common::{discover_action_server, within, DELIVERY_TIMEOUT};
 use futures::StreamExt;
 

@@ -7,7 +7,7 @@ mod common;
 use std::time::Duration;
 
 use cell_msgs::{to_cdr, HeatMap, Toolpath};
-use cell_probe::{hot_spot, test_block, ProbeParams};
+use probe::{hot_spot, test_block, ProbeParams};
 use cell_runtime::{QosPreset, Received, Subscriber, Via};
 use common::{fresh_domain, node, DELIVERY_TIMEOUT};
 

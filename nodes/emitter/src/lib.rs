@@ -1,259 +1,284 @@
-//! `cell_emitter`: turns a `Toolpath` into a `MachineProgram` for a machine profile.
+//! The `emitter` node: `Toolpath`s in, `MachineProgram`s out. The ROS adapter over
+//! [`cell_emitter::emit_program`].
 //!
-//! - [`arcs`]: G2/G3 arc fitting within a tolerance.
-//! - [`gcode`]: G-code for the profile's dialect (`cell_profiles::GcodeSettings`): axis words,
-//!   decimals, G94 or G93 inverse-time feeds, power words, pre-heat dwell, start and end lines.
-//! - [`rapid`]: ABB RAPID modules (`.mod`, `.modx` on RobotWare 7) and program files (`.pgf`)
-//!   for a robot profile (seed 004 §4.7): robtargets, speeddata per speed, arc or digital-output
-//!   weld on/off, module splitting.
-//! - [`program`]: the `MachineProgram` message (files, line count, SHA-256) and atomic file
-//!   output.
-//! - [`node`]: the `emitter` ROS 2 node (topic in, topic out, the `emit_program` service).
+//! - Subscribes to `input_topic` (default `toolpath`, where the planner publishes) and, for
+//!   each `Toolpath`, emits a program for the `machine_profile` parameter's profile, publishes
+//!   it on `output_topic` (default `machine_program`; both QoS `Plan`: reliable,
+//!   transient-local) and, when `output_dir` is set, writes its files there atomically.
+//! - Serves `emit_program` (`cell_msgs/srv/EmitProgram`): the request carries the toolpath and,
+//!   optionally, a profile (a name or a YAML path; empty: the node's) and a job id; the response
+//!   carries the program or why there is none. With `publish` set, the program is also
+//!   published and written as for a toolpath received on the topic.
+//! - A toolpath the emitter refuses (a NaN or infinite value, a feed ≤ 0, a position outside
+//!   the machine's travel, an axis the machine lacks) or an unknown profile gives one line that
+//!   names the job and, where it applies, the segment and point: logged for the topic, answered
+//!   for the service. Nothing is published or written, and the node keeps running.
 //!
-//! Everything but [`node`] is pure and synchronous: it knows nothing of ROS. Every input is
-//! checked first, so a bad toolpath gives an error naming the segment and point and never a
-//! partial program.
+//! The job id of a program is the request's, else the toolpath's, else `program-N` (N counts
+//! the toolpaths the node has handled). Each program and each refusal is also logged to Rerun
+//! as a text entry on `/emitter/log`.
+//!
+//! The `machine_profile` parameter is read (and, for a path, the file loaded) at start-up; a
+//! profile named in a request is resolved for that request.
 
-#![warn(missing_docs)]
+use std::{path::PathBuf, sync::Arc};
 
-pub mod arcs;
-pub mod gcode;
-pub mod node;
-pub mod program;
-pub mod rapid;
-
-use cell_msgs::{MachineProgram, ProgramFile, Toolpath};
+use anyhow::{bail, Context as _};
+use cell_msgs::{EmitProgramRequest, EmitProgramResponse, MachineProgram, Toolpath};
 use cell_profiles::MachineProfile;
+use cell_runtime::{CellNode, NodeParamError, Publisher, QosPreset};
+use serde::{Deserialize, Serialize};
 
-/// The program for `toolpath` on `profile`: G-code (one `.ngc` file) if the profile has a
-/// `gcode` section, RAPID modules if it has a `rapid` section. `job_id` names the files and
-/// goes into their header comments, sanitised.
-///
-/// # Errors
-/// A profile with neither section, or any error of [`gcode::emit`] / [`rapid::emit`]. Nothing
-/// is returned unless the whole program was written.
-pub fn emit_program(
-    toolpath: &Toolpath,
-    profile: &MachineProfile,
-    job_id: &str,
-) -> Result<MachineProgram, EmitError> {
-    let (dialect, files) = if let Some(g) = &profile.gcode {
-        let text = gcode::emit(toolpath, profile, job_id)?;
-        let dialect = serde_dialect_name(g.dialect);
-        (
-            dialect,
-            vec![ProgramFile {
-                name: format!("{}.ngc", file_stem(job_id)),
-                text,
-            }],
-        )
-    } else if profile.rapid.is_some() {
-        ("rapid".to_string(), rapid::emit(toolpath, profile, job_id)?)
-    } else {
-        return Err(EmitError::MissingSection {
-            profile: profile.name.clone(),
-            section: "gcode or rapid",
-        });
-    };
-    Ok(program::machine_program(
-        job_id,
-        &dialect,
-        &profile.name,
-        files,
-    ))
+/// The Rerun entity the node logs each program and each refusal to.
+pub const RERUN_LOG: &str = "/emitter/log";
+
+/// The service the node serves (resolved against its namespace and remappings).
+pub const SERVICE: &str = "emit_program";
+
+/// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EmitterParams {
+    /// Machine profile for toolpaths from the topic and for requests that name none: a name
+    /// under `config/machines` or a path to a profile YAML. It must have a `gcode` or a
+    /// `rapid` section.
+    pub machine_profile: String,
+    /// Topic the toolpaths come in on.
+    pub input_topic: String,
+    /// Topic the programs go out on.
+    pub output_topic: String,
+    /// Directory to write each published program's files to (created if missing); empty: do
+    /// not write files.
+    pub output_dir: String,
 }
 
-/// The dialect's name as profiles spell it (`grbl`, `linuxcnc`, `mach3`, `marlin`).
-fn serde_dialect_name(d: cell_profiles::Dialect) -> String {
-    format!("{d:?}").to_ascii_lowercase()
-}
-
-/// A file name stem from a job id: letters, digits, `_` and `-` only (others become `_`), at
-/// most 64 characters, `program` if nothing is left.
-pub fn file_stem(job_id: &str) -> String {
-    let stem: String = job_id
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .take(64)
-        .collect();
-    if stem.trim_matches('_').is_empty() {
-        "program".into()
-    } else {
-        stem
-    }
-}
-
-/// A toolpath or profile the emitter cannot turn into a program. One line, naming the segment
-/// and point (0-based) where it applies.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum EmitError {
-    /// The profile has no section for the requested output.
-    #[error("machine profile {profile:?} has no {section} section")]
-    MissingSection {
-        /// Profile name.
-        profile: String,
-        /// The section, e.g. `gcode`.
-        section: &'static str,
-    },
-    /// A coordinate, feed or power that is NaN or infinite.
-    #[error("segment {segment} point {point}: {what} is not finite")]
-    NonFinite {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-        /// Which value.
-        what: &'static str,
-    },
-    /// A feed that is not > 0 on a move that goes somewhere.
-    #[error("segment {segment} point {point}: feed {feed_mm_s} mm/s must be > 0")]
-    Feed {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-        /// The feed given.
-        feed_mm_s: f32,
-    },
-    /// A negative power (current, laser power or flow).
-    #[error("segment {segment} point {point}: power {power} must be >= 0")]
-    Power {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-        /// The power given.
-        power: f32,
-    },
-    /// A program line longer than the controller accepts.
-    #[error("program line {line} has {length} characters; the controller takes at most {limit}")]
-    LineTooLong {
-        /// 1-based line number in the program.
-        line: usize,
-        /// Its length.
-        length: usize,
-        /// The dialect's limit.
-        limit: usize,
-    },
-    /// Per-point arrays of a segment with the wrong length.
-    #[error("segment {segment}: {what} has {found} entries, the segment has {expected} points")]
-    Length {
-        /// Segment index.
-        segment: usize,
-        /// Which array.
-        what: &'static str,
-        /// Points in the segment.
-        expected: usize,
-        /// Entries given.
-        found: usize,
-    },
-    /// The toolpath needs an axis the profile does not map (e.g. UV points on an XY machine).
-    #[error("machine profile {profile:?} has no axis for {what}")]
-    NoAxis {
-        /// Profile name.
-        profile: String,
-        /// What needed the axis.
-        what: &'static str,
-    },
-    /// A position outside the machine's travel.
-    #[error("segment {segment} point {point}: {violation}")]
-    Envelope {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-        /// Which axis and value.
-        violation: cell_profiles::EnvelopeViolation,
-    },
-    /// A feed above the machine's `max_feed_mm_s` (RAPID: the speed of a move, travel speed
-    /// included).
-    #[error("segment {segment} point {point}: speed {feed_mm_s} mm/s is above the machine's max_feed_mm_s = {max_feed_mm_s}")]
-    FeedLimit {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-        /// The speed asked for, mm/s.
-        feed_mm_s: f64,
-        /// The profile's limit, mm/s.
-        max_feed_mm_s: f64,
-    },
-    /// A tool-axis normal of (nearly) zero length: no orientation can be derived from it.
-    #[error("segment {segment} point {point}: the normal has zero length")]
-    Normal {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-    },
-    /// A process run (cut, deposit or lead points between travel moves) of a single point:
-    /// the process would switch on and off at one place.
-    #[error(
-        "segment {segment} point {point}: a weld run needs at least two points, this one has one"
-    )]
-    ShortRun {
-        /// Segment index.
-        segment: usize,
-        /// Point index within the segment.
-        point: usize,
-    },
-    /// More part modules than the names allow (RAPID: raise `max_targets_per_module`).
-    #[error("the program needs {modules} modules, more than {max}; raise max_targets_per_module")]
-    TooManyModules {
-        /// Modules needed.
-        modules: usize,
-        /// The most the emitter writes.
-        max: usize,
-    },
-    /// A name built from user text that is not a valid identifier of the output language.
-    #[error("identifier {name:?}: {reason}")]
-    Identifier {
-        /// The name.
-        name: String,
-        /// The rule broken.
-        reason: String,
-    },
-    /// Writing the output failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The I/O error.
-        message: String,
-    },
-}
-
-/// Checks that a segment's per-point arrays each hold one entry per point (`secondary_points`,
-/// `power` and, if `with_normals`, `normals` may also be empty).
-fn check_lengths(
-    seg: &cell_msgs::ToolpathSegment,
-    segment: usize,
-    with_normals: bool,
-) -> Result<(), EmitError> {
-    let n = seg.points.len();
-    let mut arrays = vec![
-        ("secondary_points", seg.secondary_points.len(), true),
-        ("feed_mm_s", seg.feed_mm_s.len(), false),
-        ("power", seg.power.len(), true),
-    ];
-    if with_normals {
-        arrays.push(("normals", seg.normals.len(), true));
-    }
-    for (what, len, may_be_empty) in arrays {
-        if len != n && !(may_be_empty && len == 0) {
-            return Err(EmitError::Length {
-                segment,
-                what,
-                expected: n,
-                found: len,
-            });
+impl Default for EmitterParams {
+    fn default() -> Self {
+        Self {
+            machine_profile: "linuxcnc-xyuv".into(),
+            input_topic: "toolpath".into(),
+            output_topic: "machine_program".into(),
+            output_dir: String::new(),
         }
     }
-    Ok(())
+}
+
+/// The job id of a program: `requested`, else the toolpath's, else `program-{count}`.
+pub fn job_id(requested: &str, toolpath: &Toolpath, count: u64) -> String {
+    [requested, toolpath.job_id.as_str()]
+        .into_iter()
+        .find(|s| !s.is_empty())
+        .map_or_else(|| format!("program-{count}"), str::to_owned)
+}
+
+/// The node's state between messages.
+struct Emitter {
+    node: CellNode,
+    profile_name: String,
+    profile: Arc<MachineProfile>,
+    output_dir: Option<PathBuf>,
+    programs: Publisher<MachineProgram>,
+    handled: u64,
+}
+
+impl Emitter {
+    /// Emits on a blocking thread (a named profile may be a file to read; a long toolpath takes
+    /// a while). An empty `profile` is the node's. Errors are one line naming the job.
+    async fn emit(
+        &self,
+        toolpath: Toolpath,
+        profile: String,
+        job_id: String,
+    ) -> Result<MachineProgram, String> {
+        let default =
+            (profile.is_empty() || profile == self.profile_name).then(|| self.profile.clone());
+        tokio::task::spawn_blocking(move || {
+            let profile = match default {
+                Some(p) => p,
+                None => Arc::new(
+                    MachineProfile::resolve(&profile).map_err(|e| format!("job {job_id}: {e}"))?,
+                ),
+            };
+            cell_emitter::emit_program(&toolpath, &profile, &job_id)
+                .map_err(|e| format!("job {job_id}: {e}"))
+        })
+        .await
+        .map_err(|e| format!("emitter thread: {e}"))?
+    }
+
+    /// Writes the program's files to `output_dir` (if set), publishes it and logs it. Returns
+    /// a note if the files could not be written (the program is published regardless).
+    async fn deliver(&self, program: MachineProgram) -> Option<String> {
+        let mut note = None;
+        if let Some(dir) = self.output_dir.clone() {
+            let p = program.clone();
+            let written = tokio::task::spawn_blocking(move || {
+                cell_emitter::program::write_files(&p, &dir, None)
+            })
+            .await;
+            match written {
+                Ok(Ok(paths)) => tracing::debug!("job {}: wrote {paths:?}", program.job_id),
+                Ok(Err(e)) => note = Some(format!("not written: {e}")),
+                Err(e) => note = Some(format!("not written: writer thread: {e}")),
+            }
+        }
+        if let Some(n) = &note {
+            tracing::warn!("job {}: {n}", program.job_id);
+        }
+        let summary = cell_emitter::program::summary(&program);
+        let sink = self.node.rerun();
+        sink.set_time(&program.header.stamp, self.handled as i64);
+        sink.log_text(RERUN_LOG, &summary);
+        match self.programs.publish(program).await {
+            Ok(()) => tracing::info!("{}: {summary}", self.programs.topic()),
+            Err(e) => tracing::warn!("{summary}: {e:#}"),
+        }
+        note
+    }
+
+    /// Logs a refused toolpath or request.
+    fn refuse(&self, source: &str, why: &str) {
+        tracing::warn!("{source}: refused: {why}");
+        self.node
+            .rerun()
+            .log_text(RERUN_LOG, &format!("refused ({source}): {why}"));
+    }
+
+    /// A toolpath from the input topic.
+    async fn on_toolpath(&mut self, source: &str, toolpath: Toolpath) {
+        self.handled += 1;
+        let job_id = job_id("", &toolpath, self.handled);
+        match self.emit(toolpath, String::new(), job_id).await {
+            Ok(program) => {
+                self.deliver(program).await;
+            }
+            Err(why) => self.refuse(source, &why),
+        }
+    }
+
+    /// An `emit_program` request.
+    async fn on_request(
+        &mut self,
+        source: &str,
+        request: EmitProgramRequest,
+    ) -> EmitProgramResponse {
+        self.handled += 1;
+        let job_id = job_id(&request.job_id, &request.toolpath, self.handled);
+        let program = match self
+            .emit(request.toolpath, request.machine_profile, job_id)
+            .await
+        {
+            Ok(program) => program,
+            Err(why) => {
+                self.refuse(source, &why);
+                return EmitProgramResponse {
+                    success: false,
+                    message: why,
+                    program: MachineProgram::default(),
+                };
+            }
+        };
+        let mut message = cell_emitter::program::summary(&program);
+        if request.publish {
+            if let Some(note) = self.deliver(program.clone()).await {
+                message = format!("{message}; {note}");
+            }
+        } else {
+            tracing::info!("{source}: {message}");
+        }
+        EmitProgramResponse {
+            success: true,
+            message,
+            program,
+        }
+    }
+}
+
+/// Emits programs and serves `emit_program` until shutdown.
+///
+/// # Errors
+/// At start-up: a `machine_profile` that does not resolve or takes no programs (a
+/// [`NodeParamError`]: exit status 64), an `output_dir` that cannot be created, topics or the
+/// service that cannot be set up.
+pub async fn run(node: CellNode, p: EmitterParams) -> anyhow::Result<()> {
+    let profile = MachineProfile::resolve(&p.machine_profile)
+        .map_err(|e| NodeParamError(format!("machine_profile: {e}")))?;
+    if profile.gcode.is_none() && profile.rapid.is_none() {
+        return Err(NodeParamError(format!(
+            "machine_profile: {:?} has no gcode or rapid section, so no program can be written for it",
+            p.machine_profile
+        ))
+        .into());
+    }
+    let output_dir = (!p.output_dir.is_empty()).then(|| PathBuf::from(&p.output_dir));
+    if let Some(dir) = &output_dir {
+        std::fs::create_dir_all(dir).with_context(|| format!("output_dir {}", dir.display()))?;
+    }
+    let mut toolpaths = node.subscriber::<Toolpath>(&p.input_topic, QosPreset::Plan)?;
+    let programs = node.publisher::<MachineProgram>(&p.output_topic, QosPreset::Plan)?;
+    let server = node.service_server::<EmitProgramRequest, EmitProgramResponse>(SERVICE)?;
+    tracing::info!(
+        "emitting {} -> {} for {}; serving {}",
+        toolpaths.topic(),
+        programs.topic(),
+        profile.name,
+        server.name()
+    );
+    let input = toolpaths.topic().to_owned();
+    let service = server.name().to_owned();
+    let mut emitter = Emitter {
+        node: node.clone(),
+        profile_name: p.machine_profile.clone(),
+        profile: Arc::new(profile),
+        output_dir,
+        programs,
+        handled: 0,
+    };
+    loop {
+        tokio::select! {
+            received = toolpaths.recv() => {
+                let Some(received) = received else {
+                    bail!("{input}: the subscription ended");
+                };
+                emitter.on_toolpath(&input, received.message).await;
+            }
+            (id, request) = server.receive() => {
+                let response = emitter.on_request(&service, request).await;
+                if let Err(e) = server.respond(id, response).await {
+                    tracing::warn!("{e:#}");
+                }
+            }
+            _ = node.shutdown().requested() => return Ok(()),
+        }
+    }
+}
+
+/// The `emitter` binary (also `cell node emitter`).
+pub fn main(argv: Vec<String>) -> std::process::ExitCode {
+    cell_runtime::run_node("emitter", argv, run)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_params_file_parses_and_matches_the_defaults() {
+        let mut sources = cell_runtime::params::ParamSources::default();
+        let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/emitter.yaml");
+        sources
+            .merge_file(std::path::Path::new(file), "/", "emitter")
+            .unwrap();
+        let p: EmitterParams = sources.parse().unwrap();
+        assert_eq!(p, EmitterParams::default());
+    }
+
+    #[test]
+    fn job_ids_come_from_the_request_then_the_toolpath() {
+        let mut toolpath = Toolpath::default();
+        assert_eq!(job_id("", &toolpath, 3), "program-3");
+        toolpath.job_id = "wing-1".into();
+        assert_eq!(job_id("", &toolpath, 3), "wing-1");
+        assert_eq!(job_id("rerun-2", &toolpath, 3), "rerun-2");
+    }
 }

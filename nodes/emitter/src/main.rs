@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    cell_emitter::node::main(std::env::args().skip(1).collect())
+    emitter::main(std::env::args().skip(1).collect())
 }

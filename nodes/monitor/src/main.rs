@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    cell_monitor::main(std::env::args().skip(1).collect())
+    monitor::main(std::env::args().skip(1).collect())
 }

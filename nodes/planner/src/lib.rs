@@ -1,33 +1,516 @@
-//! `cell_planner`: the hot-wire planner's pure geometry and process-model library.
+//! The `planner` node: serves the `plan_hotwire` action (`cell_msgs/action/PlanHotwire`).
 //!
-//! - [`airfoil`]: UIUC `.dat` input (Selig and Lednicer, auto-detected) and the section geometry
-//!   the wire follows: normalise, scale, twist, close the trailing edge, resample, and
-//!   synchronise a root and a tip section point for point.
-//! - [`kerf`]: the seed 001 hot-wire kerf model (Aitchison et al.), its five inverse forms, the
-//!   constant-kerf current schedule, the wire-centre path offset and the foam/wire libraries.
-//! - [`exposure`]: seed 000's surface thermal exposure (eq. 1–5), integrated in closed form over
-//!   each wire segment, with the causal mask.
-//! - [`trajectory`]: the fixed-offset baseline path, its periodic cubic B-spline normal
-//!   displacement and the T ∩ G = ∅ feasibility test.
-//! - [`pso`]: seed 000 §IV.C particle swarm optimisation of the path for uniform exposure.
-//! - [`calibration`]: seed 000 §IV.D CSE calibration: the chord a path leaves for each CSE of a
-//!   sweep, and the CSE a measured test-cut chord implies.
-//! - [`wing`]: beyond the paper's 2-D cut: tapered, swept, twisted panels on a 4-axis cutter
-//!   (root/tip synchronisation, projection onto the carriage planes, move timing).
-//! - [`job`]: one planning job end to end (foil → offset → baseline → swarm → plan), with its
-//!   `Toolpath` and `HeatMap` views.
-//! - [`node`]: the `planner` ROS 2 node serving the `plan_hotwire` action.
+//! Goals go through [`cell_runtime::goal_server`]. Per goal: validate (chord > 0, airfoil and
+//! machine resolvable; otherwise the goal is rejected), accept, run
+//! [`cell_planner::job::plan_observed`] on a blocking thread, send feedback every
+//! `feedback_every` iterations (and log the loss curve to Rerun), publish the exposure profile on
+//! `exposure` and the wire × panel matrix on `exposure_matrix` for each baseline and then for the
+//! current best at most every `exposure_period_s`, then publish the `Toolpath` on `toolpath` and
+//! the final maps, log to Rerun and send the result. A failed job ends its goal as aborted with
+//! the error; the node keeps serving. Goals are planned one at a time, in arrival order.
 //!
-//! Everything but [`node`] is synchronous and free of ROS/DDS; the planner node builds on it.
+//! A goal naming a tip (airfoil, chord, twist or sweep) plans a tapered panel on a 4-axis
+//! machine; the toolpath is in the machine profile's carriage coordinates. A cancel request
+//! for the executing goal stops the swarm within one iteration and ends the goal as canceled.
 
-#![warn(missing_docs)]
+use std::{ops::ControlFlow, time::Duration};
 
-pub mod airfoil;
-pub mod calibration;
-pub mod exposure;
-pub mod job;
-pub mod kerf;
-pub mod node;
-pub mod pso;
-pub mod trajectory;
-pub mod wing;
+use cell_msgs::{HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath};
+use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::{CellNode, Publisher, QosPreset};
+use serde::{Deserialize, Serialize};
+
+use cell_profiles::MachineProfile;
+
+use cell_planner::job::{
+    self, AirfoilSource, HotwireJob, HotwirePlan, JobProgress, LiveMaps, LiveOptions, TipRequest,
+    TipSection,
+};
+use cell_planner::pso::PsoConfig;
+use cell_planner::wing::Placement;
+
+/// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlannerParams {
+    /// Foam id used when a goal's `material` is empty.
+    pub default_material: String,
+    /// Machine profile used when a goal's `machine_profile` is empty: a name under
+    /// `config/machines` or a path to a profile YAML (it gives the wire, supply and travel).
+    pub machine_profile: String,
+    /// Panel span (mm) when a goal's `span_mm` is 0.
+    pub span_mm: f64,
+    /// Tip twist pivot as a fraction of the tip chord from its LE.
+    pub twist_pivot_chord_fraction: f64,
+    /// Nominal wire current (A) (sets the default offset; constant current as a fallback).
+    pub current_a: f64,
+    /// Make the feed along the path a design variable (0.5–1.5 × `feed_mm_s`, constant
+    /// current).
+    pub optimise_feed: bool,
+    /// Cutting feed (mm/s).
+    pub feed_mm_s: f64,
+    /// Straight lead-in / lead-out length behind the trailing edge (mm).
+    pub lead_in_mm: f64,
+    /// Surface panels N of the exposure model.
+    pub panels: usize,
+    /// PSO iterations when a goal asks for 0.
+    pub iterations: usize,
+    /// PSO particles.
+    pub particles: usize,
+    /// PSO restart period (iterations); 0: never.
+    pub restart_every: usize,
+    /// Send feedback every this many iterations (and after the last).
+    pub feedback_every: usize,
+    /// Publish the current best's exposure profile and matrix at most this often while
+    /// planning (s); 0: only the baselines and the end.
+    pub exposure_period_s: f64,
+    /// How long to wait for a client to ask for a goal's result (s).
+    pub result_timeout_s: f64,
+}
+
+impl Default for PlannerParams {
+    fn default() -> Self {
+        let job = HotwireJob::default();
+        Self {
+            default_material: job.material,
+            machine_profile: job.machine.name,
+            span_mm: job.span_mm,
+            twist_pivot_chord_fraction: Placement::ROOT.pivot_chord_fraction,
+            current_a: job.current_a,
+            optimise_feed: false,
+            feed_mm_s: job.feed_mm_s,
+            lead_in_mm: job.lead_in_mm,
+            panels: job.panels,
+            iterations: job.pso.iterations,
+            particles: job.pso.particles,
+            restart_every: job.pso.restart_every,
+            feedback_every: 50,
+            exposure_period_s: 1.0,
+            result_timeout_s: 600.0,
+        }
+    }
+}
+
+/// The job a goal asks for, or why it cannot be planned (one line).
+///
+/// Empty or zero goal fields take the parameters' or the root's values: `tip_airfoil` empty
+/// and `tip_chord_mm` 0 mean the root's, `span_mm` 0 and `machine_profile` empty the
+/// parameters'.
+///
+/// # Errors
+/// A chord that is not > 0, an airfoil or machine profile that does not resolve or load,
+/// other invalid values.
+pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJob, String> {
+    let defaults = HotwireJob::default();
+    if goal.root_airfoil.is_empty() {
+        return Err("root_airfoil is empty".into());
+    }
+    let machine_name = if goal.machine_profile.is_empty() {
+        &p.machine_profile
+    } else {
+        &goal.machine_profile
+    };
+    let machine = MachineProfile::resolve(machine_name).map_err(|e| e.to_string())?;
+    let root_airfoil = AirfoilSource::parse(&goal.root_airfoil);
+    // Empty strings and zeros are the goal's "not given".
+    let given = |v: f64| (v != 0.0).then_some(v);
+    let request = TipRequest {
+        airfoil: (!goal.tip_airfoil.is_empty()).then_some(goal.tip_airfoil.as_str()),
+        chord_mm: given(goal.tip_chord_mm),
+        twist_deg: given(goal.tip_twist_deg),
+        sweep_mm: given(goal.tip_sweep_mm),
+    };
+    let tip = TipSection::requested(
+        &request,
+        &root_airfoil,
+        goal.root_chord_mm,
+        p.twist_pivot_chord_fraction,
+    );
+    let job = HotwireJob {
+        root_airfoil,
+        chord_mm: goal.root_chord_mm,
+        tip,
+        span_mm: if goal.span_mm == 0.0 {
+            p.span_mm
+        } else {
+            goal.span_mm
+        },
+        machine,
+        material: if goal.material.is_empty() {
+            p.default_material.clone()
+        } else {
+            goal.material.clone()
+        },
+        current_a: p.current_a,
+        cse: (goal.cse > 0.0).then_some(goal.cse),
+        panels: p.panels,
+        objective: cell_planner::pso::Objective {
+            feed: p
+                .optimise_feed
+                .then(cell_planner::pso::FeedVariable::default),
+            ..defaults.objective
+        },
+        pso: PsoConfig {
+            particles: p.particles,
+            iterations: if goal.iterations == 0 {
+                p.iterations
+            } else {
+                goal.iterations as usize
+            },
+            restart_every: p.restart_every,
+            ..defaults.pso
+        },
+        seed: goal.seed,
+        feed_mm_s: p.feed_mm_s,
+        lead_in_mm: p.lead_in_mm,
+        ..defaults
+    };
+    job::validate(&job).map_err(|e| e.to_string())?;
+    job.pso.validate().map_err(|e| e.to_string())?;
+    job.root_airfoil.load().map_err(|e| e.to_string())?;
+    if let Some(t) = &job.tip {
+        t.airfoil.load().map_err(|e| e.to_string())?;
+    }
+    Ok(job)
+}
+
+/// What the planning thread reports to the node.
+enum Update {
+    Maps(Box<LiveMaps>),
+    Progress(JobProgress),
+}
+
+/// The result message of a finished plan.
+fn summary(job_id: &str, job: &HotwireJob, plan: &HotwirePlan) -> String {
+    let mut msg = format!(
+        "planned {job_id}: {} at {} mm, loss {:.4e} -> {:.4e}, RMS {:.4} -> {:.4} \
+         ({} iterations, {:.1} s, seed {})",
+        plan.root.airfoil,
+        job.chord_mm,
+        plan.root.baseline_loss,
+        plan.root.final_loss,
+        plan.root.baseline_stats.rms,
+        plan.root.optimised_stats.rms,
+        plan.iterations,
+        plan.seconds,
+        plan.seed
+    );
+    if let Some(t) = &plan.tip {
+        msg.push_str(&format!(
+            "; tip {} at {} mm: RMS {:.4} -> {:.4}",
+            t.airfoil, t.chord_mm, t.baseline_stats.rms, t.optimised_stats.rms
+        ));
+    }
+    for note in &plan.notes {
+        msg.push_str("; ");
+        msg.push_str(note);
+    }
+    msg
+}
+
+fn log_to_rerun(node: &CellNode, plan: &HotwirePlan, toolpath: &Toolpath, profile: &HeatMap) {
+    let sink = node.rerun();
+    sink.set_time(&toolpath.header.stamp, 0);
+    if let Some(rec) = sink.stream() {
+        // Foils and face paths where they sit in the machine, beside the carriage paths.
+        for (name, pts) in plan.placed_sections() {
+            let strip: Vec<[f32; 3]> = pts
+                .iter()
+                .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
+                .collect();
+            if let Err(e) = rec.log(
+                format!("/hotwire/{name}"),
+                &rerun::LineStrips3D::new([strip]),
+            ) {
+                tracing::warn!("rerun: {e}");
+            }
+        }
+        for &(it, loss) in &plan.root.loss_history {
+            rec.set_time_sequence("iteration", it as i64);
+            if let Err(e) = rec.log("/hotwire/loss", &rerun::Scalars::single(loss)) {
+                tracing::warn!("rerun: {e}");
+            }
+        }
+        rec.disable_timeline("iteration");
+    }
+    sink.log_toolpath("/hotwire/trajectory", toolpath);
+    sink.log_heat_map("/hotwire/exposure", profile);
+    sink.log_text(
+        "/hotwire/log",
+        &format!(
+            "{} loss {:.4e} -> {:.4e}",
+            toolpath.job_id, plan.root.baseline_loss, plan.root.final_loss
+        ),
+    );
+}
+
+/// Logs one point of the loss curve on the `iteration` timeline.
+fn log_loss(node: &CellNode, iteration: usize, loss: f64) {
+    if let Some(rec) = node.rerun().stream() {
+        rec.set_time_sequence("iteration", iteration as i64);
+        if let Err(e) = rec.log("/hotwire/loss", &rerun::Scalars::single(loss)) {
+            tracing::warn!("rerun: {e}");
+        }
+        rec.disable_timeline("iteration");
+    }
+}
+
+/// Logs the current best's exposure profile and matrix while planning.
+fn log_live(node: &CellNode, maps: &LiveMaps) {
+    let sink = node.rerun();
+    sink.set_time(&maps.profile.header.stamp, 0);
+    let section = if maps.profile.header.frame_id == job::TIP_FRAME_ID {
+        "tip"
+    } else {
+        "root"
+    };
+    sink.log_heat_map(&format!("/hotwire/live/{section}/exposure"), &maps.profile);
+    sink.log_heat_map(
+        &format!("/hotwire/live/{section}/exposure_matrix"),
+        &maps.matrix,
+    );
+}
+
+/// The `plan_hotwire` goals: [`goal_to_job`] checks them, the PSO plans them.
+struct Planner {
+    node: CellNode,
+    p: PlannerParams,
+    toolpaths: Publisher<Toolpath>,
+    exposure: Publisher<HeatMap>,
+    matrix: Publisher<HeatMap>,
+}
+
+impl GoalHandler for Planner {
+    type Goal = PlanHotwireGoal;
+    type Result = PlanHotwireResult;
+    type Feedback = PlanHotwireFeedback;
+    type Job = HotwireJob;
+
+    fn job_id(&self, goal: &PlanHotwireGoal, served: u64) -> String {
+        if goal.job_id.is_empty() {
+            format!("hotwire-{served}")
+        } else {
+            goal.job_id.clone()
+        }
+    }
+
+    fn validate(&self, goal: &PlanHotwireGoal, _job_id: &str) -> Result<HotwireJob, String> {
+        goal_to_job(goal, &self.p)
+    }
+
+    async fn run(
+        &self,
+        job: HotwireJob,
+        ctx: GoalContext<PlanHotwireFeedback>,
+    ) -> anyhow::Result<GoalEnd<PlanHotwireResult>> {
+        let job_id = ctx.job_id().to_owned();
+        tracing::info!(
+            "plan_hotwire: planning {job_id} ({} at {} mm, {} iterations, seed {})",
+            job.root_airfoil,
+            job.chord_mm,
+            job.pso.iterations,
+            job.seed
+        );
+        let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
+        let every = self.p.feedback_every.max(1);
+        let live = LiveOptions {
+            period: (self.p.exposure_period_s > 0.0)
+                .then(|| Duration::from_secs_f64(self.p.exposure_period_s)),
+        };
+        let planning = {
+            let (job, shutdown) = (job.clone(), self.node.shutdown().clone());
+            ctx.run_blocking(move |ctx| {
+                job::plan_observed(
+                    &job,
+                    &live,
+                    |maps| {
+                        let _ = tx.send(Update::Maps(Box::new(maps)));
+                    },
+                    |pr| {
+                        if pr.iteration % every == 0 || pr.iteration == pr.total {
+                            let _ = tx.send(Update::Progress(*pr));
+                        }
+                        // A cancel, or the node stopping, ends the swarm within one iteration.
+                        if ctx.is_canceled() || shutdown.is_triggered() {
+                            ControlFlow::Break(())
+                        } else {
+                            ControlFlow::Continue(())
+                        }
+                    },
+                )
+            })
+        };
+        let forwarding = async {
+            while let Some(update) = rx.recv().await {
+                match update {
+                    Update::Maps(maps) => {
+                        log_live(&self.node, &maps);
+                        self.exposure.publish(maps.profile).await?;
+                        self.matrix.publish(maps.matrix).await?;
+                    }
+                    Update::Progress(pr) => {
+                        log_loss(&self.node, pr.iteration, pr.best_loss);
+                        ctx.feedback(PlanHotwireFeedback {
+                            iteration: pr.iteration as u32,
+                            total_iterations: pr.total as u32,
+                            best_loss: pr.best_loss,
+                            eta_s: pr.eta_s,
+                        });
+                    }
+                }
+            }
+            anyhow::Ok(())
+        };
+        let (outcome, forwarded) = tokio::join!(planning, forwarding);
+        forwarded?;
+        Ok(match outcome? {
+            Ok(plan) => {
+                let toolpath = plan.to_toolpath(&job_id);
+                let profile = plan.exposure_heat_map();
+                self.toolpaths.publish(toolpath.clone()).await?;
+                self.exposure.publish(profile.clone()).await?;
+                match plan.exposure_matrix_heat_map() {
+                    Ok(m) => self.matrix.publish(m).await?,
+                    Err(e) => tracing::warn!("plan_hotwire: {job_id}: exposure matrix: {e}"),
+                }
+                log_to_rerun(&self.node, &plan, &toolpath, &profile);
+                let message = summary(&job_id, &job, &plan);
+                tracing::info!("plan_hotwire: {message}");
+                GoalEnd::succeeded(PlanHotwireResult {
+                    success: true,
+                    message,
+                    toolpath,
+                    final_loss: plan.root.final_loss,
+                    baseline_loss: plan.root.baseline_loss,
+                })
+            }
+            Err(e @ job::JobError::Cancelled { .. }) if ctx.is_canceled() => {
+                let message = format!("{job_id}: {e} at the client's request");
+                tracing::info!("plan_hotwire: {message}");
+                GoalEnd::canceled(PlanHotwireResult {
+                    success: false,
+                    message,
+                    ..Default::default()
+                })
+            }
+            Err(e) => {
+                let message = format!("{job_id}: {e}");
+                tracing::warn!("plan_hotwire: failed: {message}");
+                GoalEnd::aborted(PlanHotwireResult {
+                    success: false,
+                    message,
+                    ..Default::default()
+                })
+            }
+        })
+    }
+}
+
+/// Serves `plan_hotwire` until shutdown.
+pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
+    let planner = Planner {
+        toolpaths: node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?,
+        exposure: node.publisher::<HeatMap>("exposure", QosPreset::Stream)?,
+        matrix: node.publisher::<HeatMap>("exposure_matrix", QosPreset::Stream)?,
+        node: node.clone(),
+        p: p.clone(),
+    };
+    tracing::info!(
+        "serving {} ({} panels, {} particles, {} iterations by default)",
+        node.resolve_topic("plan_hotwire"),
+        p.panels,
+        p.particles,
+        p.iterations
+    );
+    let options = ServeOptions::one_at_a_time(p.result_timeout_s);
+    goal_server::serve(node, "plan_hotwire", planner, options).await
+}
+
+/// The `planner` binary (also `cell node planner`).
+pub fn main(argv: Vec<String>) -> std::process::ExitCode {
+    cell_runtime::run_node("planner", argv, run)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_params_file_parses_and_matches_the_defaults() {
+        let mut sources = cell_runtime::params::ParamSources::default();
+        let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/planner.yaml");
+        sources
+            .merge_file(std::path::Path::new(file), "/", "planner")
+            .unwrap();
+        let p: PlannerParams = sources.parse().unwrap();
+        assert_eq!(p, PlannerParams::default());
+    }
+
+    #[test]
+    fn goals_map_to_jobs_and_bad_ones_are_named() {
+        let p = PlannerParams::default();
+        let goal = PlanHotwireGoal {
+            root_airfoil: "s1223".into(),
+            root_chord_mm: 150.0,
+            ..Default::default()
+        };
+        let job = goal_to_job(&goal, &p).unwrap();
+        assert_eq!(job.pso.iterations, p.iterations);
+        assert_eq!(job.material, p.default_material);
+        let job = goal_to_job(
+            &PlanHotwireGoal {
+                iterations: 7,
+                ..goal.clone()
+            },
+            &p,
+        )
+        .unwrap();
+        assert_eq!(job.pso.iterations, 7);
+        let e = goal_to_job(
+            &PlanHotwireGoal {
+                root_chord_mm: 0.0,
+                ..goal.clone()
+            },
+            &p,
+        )
+        .unwrap_err();
+        assert!(e.starts_with("chord_mm"), "{e}");
+        let e = goal_to_job(
+            &PlanHotwireGoal {
+                root_airfoil: "nope".into(),
+                ..goal
+            },
+            &p,
+        )
+        .unwrap_err();
+        assert!(e.contains("nope"), "{e}");
+        let tapered = PlanHotwireGoal {
+            root_airfoil: "s1223".into(),
+            root_chord_mm: 150.0,
+            tip_chord_mm: 100.0,
+            ..Default::default()
+        };
+        let job = goal_to_job(&tapered, &p).unwrap();
+        let tip = job.tip.as_ref().unwrap();
+        assert_eq!((tip.chord_mm, &tip.airfoil), (100.0, &job.root_airfoil));
+        assert_eq!(job.span_mm, p.span_mm);
+        let e = goal_to_job(
+            &PlanHotwireGoal {
+                machine_profile: "grbl-xy".into(),
+                ..tapered.clone()
+            },
+            &p,
+        )
+        .unwrap_err();
+        assert!(e.contains("4-axis"), "{e}");
+        let e = goal_to_job(
+            &PlanHotwireGoal {
+                machine_profile: "mill_9000".into(),
+                ..tapered
+            },
+            &p,
+        )
+        .unwrap_err();
+        assert!(e.contains("mill_9000"), "{e}");
+    }
+}

@@ -8,6 +8,7 @@
 
 use std::time::Duration;
 
+use cell_geometry::{resample_max_step, Norm};
 use cell_msgs::{
     builtin_interfaces::Time, geometry_msgs::Point, std_msgs::Header, HeatMap, Toolpath,
     ToolpathSegment,
@@ -73,26 +74,16 @@ impl Default for ProbeParams {
 /// Points along a closed rectangle, `step_mm` apart, starting at its lower-left corner.
 fn rectangle(width: f64, height: f64, z: f64, step_mm: f64) -> Vec<Point> {
     let corners = [
-        (0.0, 0.0),
-        (0.0, height),
-        (width, height),
-        (width, 0.0),
-        (0.0, 0.0),
+        [0.0, 0.0],
+        [0.0, height],
+        [width, height],
+        [width, 0.0],
+        [0.0, 0.0],
     ];
-    let mut pts = vec![Point { x: 0.0, y: 0.0, z }];
-    for pair in corners.windows(2) {
-        let ((x0, y0), (x1, y1)) = (pair[0], pair[1]);
-        let n = ((x1 - x0).hypot(y1 - y0) / step_mm).ceil().max(1.0) as usize;
-        for i in 1..=n {
-            let t = i as f64 / n as f64;
-            pts.push(Point {
-                x: x0 + t * (x1 - x0),
-                y: y0 + t * (y1 - y0),
-                z,
-            });
-        }
-    }
-    pts
+    resample_max_step(&corners, step_mm, Norm::Hypot)
+        .into_iter()
+        .map(|[x, y]| Point { x, y, z })
+        .collect()
 }
 
 /// The tapered hot-wire test block: lead-in, cut, lead-out, travel home.
@@ -253,7 +244,7 @@ pub async fn run(node: CellNode, p: ProbeParams) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The `cell_probe` binary (also `cell node cell_probe`).
+/// The `probe` binary (also `cell node probe`); on the ROS graph the node is `cell_probe`.
 pub fn main(argv: Vec<String>) -> std::process::ExitCode {
     cell_runtime::run_node("cell_probe", argv, run)
 }
@@ -274,9 +265,8 @@ mod tests {
         assert!((first.x - last.x).abs() < 1e-9 && (first.y - last.y).abs() < 1e-9);
         // Perimeter 2·(120+40) = 320 mm at the root, 0.75 of it at the tip.
         let length = |pts: &[Point]| -> f64 {
-            pts.windows(2)
-                .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y))
-                .sum()
+            let xy: Vec<[f64; 2]> = pts.iter().map(|p| [p.x, p.y]).collect();
+            cell_geometry::polyline_length(&xy, Norm::Hypot)
         };
         assert!((length(&cut.points) - 320.0).abs() < 1e-9);
         assert!((length(&cut.secondary_points) - 240.0).abs() < 1e-9);

@@ -17,7 +17,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use anyhow::Context as _;
 use cell_bag::{BagWriter, BagWriterOptions, QosProfile};
 use cell_runtime::graph::PublishedTopic;
-use cell_runtime::{CellNode, ParamError, QosPreset};
+use cell_runtime::{CellNode, NodeParamError, QosPreset};
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc;
 
@@ -64,13 +64,13 @@ impl TopicFilter {
     ///
     /// # Errors
     /// A pattern that is not a regular expression, named with its parameter and index.
-    pub fn new(include: &[String], exclude: &[String]) -> Result<Self, ParamError> {
+    pub fn new(include: &[String], exclude: &[String]) -> Result<Self, NodeParamError> {
         let compile = |field: &str, list: &[String]| {
             list.iter()
                 .enumerate()
                 .map(|(i, p)| {
                     regex::Regex::new(&format!("^(?:{p})$"))
-                        .map_err(|e| ParamError(format!("{field}[{i}]: {p:?}: {e}")))
+                        .map_err(|e| NodeParamError(format!("{field}[{i}]: {p:?}: {e}")))
                 })
                 .collect::<Result<Vec<_>, _>>()
         };
@@ -161,23 +161,23 @@ fn forward<T: cell_msgs::RosMessage>(
 /// Records until shutdown, then finishes the bag.
 ///
 /// # Errors
-/// Bad parameters ([`ParamError`], exit 64); a bag that cannot be created or written.
+/// Bad parameters ([`NodeParamError`], exit 64); a bag that cannot be created or written.
 pub async fn run(node: CellNode, p: RecorderParams) -> anyhow::Result<()> {
     let filter = TopicFilter::new(&p.topics, &p.exclude)?;
     if !(p.discover_every_s.is_finite() && p.discover_every_s > 0.0) {
-        return Err(ParamError(format!(
+        return Err(NodeParamError(format!(
             "discover_every_s: {}: expected > 0",
             p.discover_every_s
         ))
         .into());
     }
-    let positive = |v: f64, field: &str| -> Result<Option<f64>, ParamError> {
+    let positive = |v: f64, field: &str| -> Result<Option<f64>, NodeParamError> {
         if v == 0.0 {
             Ok(None)
         } else if v.is_finite() && v > 0.0 {
             Ok(Some(v))
         } else {
-            Err(ParamError(format!(
+            Err(NodeParamError(format!(
                 "{field}: {v}: expected > 0, or 0 for never"
             )))
         }

@@ -2,7 +2,7 @@
 //! the replayer playing it back with its recorded timing to a subscriber, over real DDS on
 //! loopback (and the iceoryx2 fast path for heat maps), one process, one participant per node.
 //!
-//! `cargo bench -p cell_replayer --bench record_replay [-- --seconds S --heat-seconds S]`
+//! `cargo bench -p replayer --bench record_replay [-- --seconds S --heat-seconds S]`
 //!
 //! Two streams:
 //! - `MachineStatus` at 1 kHz (reliable, volatile: the `Status` preset) for `--seconds` (10);
@@ -25,8 +25,8 @@ use std::time::{Duration, Instant};
 
 use cell_bag::BagReader;
 use cell_msgs::{HeatMap, MachineStatus, RosMessage};
-use cell_recorder::RecorderParams;
-use cell_replayer::{Replay, ReplayerParams};
+use recorder::RecorderParams;
+use replayer::{Replay, ReplayerParams};
 use cell_runtime::node::ParticipantGuard;
 use cell_runtime::{CellNode, FastPathMode, NodeSetup, QosPreset};
 
@@ -89,7 +89,7 @@ async fn measure<T: RosMessage>(
 
     // Record: a publisher at the stream's rate, the recorder node writing the bag.
     let (recorder, recorder_stop) = node("recorder", domains.0);
-    let recording = tokio::spawn(cell_recorder::run(
+    let recording = tokio::spawn(recorder::run(
         recorder,
         RecorderParams {
             output: bag.display().to_string(),

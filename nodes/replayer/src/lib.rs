@@ -37,8 +37,8 @@ use cell_bag::qos::{Durability, Reliability};
 use cell_bag::BagReader;
 use cell_msgs::std_srvs::{SetBoolRequest, SetBoolResponse};
 use cell_msgs::{CdrError, RosMessage};
-use cell_recorder::TopicFilter;
-use cell_runtime::{CellNode, DataError, ParamError, Publisher, QosPreset, Shutdown};
+use cell_runtime::{CellNode, DataError, NodeParamError, Publisher, QosPreset, Shutdown};
+use recorder::TopicFilter;
 use schedule::{check_rate, ReplayClock, Timeline};
 use serde::{Deserialize, Serialize};
 use tokio::sync::{mpsc, oneshot};
@@ -101,13 +101,13 @@ impl Remaps {
     ///
     /// # Errors
     /// An entry without `:=`, or with an empty or blank side, named with its index.
-    pub fn parse(entries: &[String]) -> Result<Self, ParamError> {
+    pub fn parse(entries: &[String]) -> Result<Self, NodeParamError> {
         entries
             .iter()
             .enumerate()
             .map(|(i, entry)| {
                 let bad = || {
-                    ParamError(format!(
+                    NodeParamError(format!(
                         "remap[{i}]: {entry:?}: expected FROM:=TO (e.g. /cell/toolpath:=/replay/toolpath)"
                     ))
                 };
@@ -283,11 +283,13 @@ pub struct Replay {
 }
 
 /// A non-negative, finite number of seconds.
-fn seconds(v: f64, field: &str) -> Result<Duration, ParamError> {
+fn seconds(v: f64, field: &str) -> Result<Duration, NodeParamError> {
     if v.is_finite() && v >= 0.0 {
         Ok(Duration::from_secs_f64(v))
     } else {
-        Err(ParamError(format!("{field}: {v}: expected seconds >= 0")))
+        Err(NodeParamError(format!(
+            "{field}: {v}: expected seconds >= 0"
+        )))
     }
 }
 
@@ -295,29 +297,29 @@ impl Replay {
     /// Checks the parameters and opens the bag.
     ///
     /// # Errors
-    /// [`ParamError`] (exit 64) for a bad parameter or a bag path that does not exist, named;
+    /// [`NodeParamError`] (exit 64) for a bad parameter or a bag path that does not exist, named;
     /// [`DataError`] (exit 65) for a bag that cannot be read (unfinished, truncated, corrupt:
     /// the message names the file).
     pub fn open(p: &ReplayerParams) -> anyhow::Result<Self> {
         if p.bag.is_empty() {
             return Err(
-                ParamError("bag: no bag given (a bag directory or .mcap file)".into()).into(),
+                NodeParamError("bag: no bag given (a bag directory or .mcap file)".into()).into(),
             );
         }
         let path = PathBuf::from(&p.bag);
         if !path.exists() {
-            return Err(ParamError(format!(
+            return Err(NodeParamError(format!(
                 "bag: {}: no such bag (a directory or .mcap file)",
                 path.display()
             ))
             .into());
         }
-        let rate = check_rate(p.rate).map_err(|e| ParamError(format!("rate: {e}")))?;
+        let rate = check_rate(p.rate).map_err(|e| NodeParamError(format!("rate: {e}")))?;
         let start_offset = seconds(p.start_offset_s, "start_offset_s")?;
         let wait_for_subscribers = seconds(p.wait_for_subscribers_s, "wait_for_subscribers_s")?;
         let linger = seconds(p.linger_s, "linger_s")?;
         if !(p.progress_every_s.is_finite() && p.progress_every_s > 0.0) {
-            return Err(ParamError(format!(
+            return Err(NodeParamError(format!(
                 "progress_every_s: {}: expected seconds > 0",
                 p.progress_every_s
             ))
@@ -352,7 +354,7 @@ impl Replay {
                     let which = remap
                         .or(other_remap)
                         .map_or("remap".to_owned(), |i| format!("remap[{i}]"));
-                    return Err(ParamError(format!(
+                    return Err(NodeParamError(format!(
                         "{which}: {output} would carry both {other_type} and {}",
                         t.type_name
                     ))
@@ -370,7 +372,7 @@ impl Replay {
         }
         if plans.is_empty() && !info.topics.is_empty() {
             let names: Vec<&str> = info.topics.iter().map(|t| t.name.as_str()).collect();
-            return Err(ParamError(format!(
+            return Err(NodeParamError(format!(
                 "topics/exclude: no topic of {} is selected (it has {})",
                 path.display(),
                 names.join(", ")
@@ -452,7 +454,7 @@ impl Replay {
                     let publisher = publisher_for(node, &plan.output, &plan.ros_type, plan.qos)
                         .ok_or_else(|| anyhow!("{}: type {} not known", plan.topic, plan.ros_type))?
                         .map_err(|e| {
-                            ParamError(format!("{} (from {}): {e:#}", plan.output, plan.topic))
+                            NodeParamError(format!("{} (from {}): {e:#}", plan.output, plan.topic))
                         })?;
                     publishers.push(publisher);
                     by_output.insert(plan.output.clone(), publishers.len() - 1);
@@ -565,7 +567,7 @@ impl Replay {
 
         let t0 = tokio::time::Instant::now();
         let now = || t0.elapsed();
-        let mut clock = ReplayClock::new(rate, now(), start_paused).map_err(ParamError)?;
+        let mut clock = ReplayClock::new(rate, now(), start_paused).map_err(NodeParamError)?;
         let mut progress = Progress {
             published: 0,
             total: total_messages,
@@ -1052,8 +1054,8 @@ mod tests {
         };
         let param_error = |p: ReplayerParams| -> String {
             let e = Replay::open(&p).err().expect("refused");
-            e.downcast_ref::<ParamError>()
-                .unwrap_or_else(|| panic!("not a ParamError: {e:#}"))
+            e.downcast_ref::<NodeParamError>()
+                .unwrap_or_else(|| panic!("not a NodeParamError: {e:#}"))
                 .0
                 .clone()
         };

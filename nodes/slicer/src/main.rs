@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    cell_slicer::node::main(std::env::args().skip(1).collect())
+    slicer::main(std::env::args().skip(1).collect())
 }

@@ -1,0 +1,90 @@
+//! The controllers without ROS: `GrblController` against the GRBL simulator over loopback TCP
+//! with the emitter's programs.
+
+use std::time::Duration;
+
+use cell_bridge::config::ControllerSpec;
+use cell_bridge::controller::Controller;
+use cell_grbl::program::{CleanOptions, Program};
+use cell_grbl::sim::{self, Faults, SimConfig, SimHandle};
+use cell_msgs::{ExecuteProgramResult as R, MachineProgram};
+
+fn emitted(profile: &str, toolpath: &str, job: &str) -> MachineProgram {
+    let text = std::fs::read_to_string(format!(
+        "{}/../../tests/data/toolpaths/{toolpath}.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let tp = cell_msgs::json::from_str(&text).unwrap();
+    let profile = cell_profiles::MachineProfile::resolve(profile).unwrap();
+    cell_emitter::emit_program(&tp, &profile, job).unwrap()
+}
+
+async fn grbl(faults: Faults, extra: &str) -> (SimHandle, Controller, tempfile::TempDir) {
+    let sim = sim::start(SimConfig {
+        time_scale: 20.0,
+        axes: vec!['X', 'Y', 'U', 'V'],
+        faults,
+        ..SimConfig::default()
+    });
+    let addr = sim.listen_tcp("127.0.0.1:0").await.unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("c.yaml");
+    std::fs::write(
+        &path,
+        format!(
+            "id: c\nprotocol: grbl\nmachine_profile: grbl-xyuv\naxes: XYUV\nendpoint: {{tcp: '{addr}'}}\n{extra}"
+        ),
+    )
+    .unwrap();
+    let spec = ControllerSpec::load(&path).unwrap();
+    let c = Controller::start(spec).await.unwrap();
+    let Controller::Grbl(g) = &c else { panic!() };
+    assert!(g.wait_connected(Duration::from_secs(30)).await);
+    (sim, c, dir)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_emitted_panel_runs_line_for_line() {
+    let (sim, c, _dir) = grbl(Faults::default(), "").await;
+    let program = emitted("grbl-xyuv", "wing", "wing");
+    let out = tokio::time::timeout(Duration::from_secs(120), c.execute(&program, 0))
+        .await
+        .expect("finishes");
+    assert!(out.success, "{}", out.message);
+    let sent = Program::parse(&program.files[0].text, CleanOptions::default()).unwrap();
+    let texts: Vec<String> = sent.lines().iter().map(|l| l.text.clone()).collect();
+    assert_eq!(sim.executed_lines(), texts);
+    assert_eq!(out.outcome, R::OUTCOME_FINISHED);
+}
+
+/// What the `machine_bridge` node rejects a goal for, before it is accepted: each reason names
+/// the dialect, the controller or the line, and nothing reaches the machine.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_program_a_controller_cannot_take_is_named_before_anything_is_sent() {
+    let (sim, c, _dir) = grbl(Faults::default(), "").await;
+    let program = emitted("grbl-xyuv", "wing", "wing");
+    assert_eq!(c.check_program(&program, 0), Ok(()));
+    let linuxcnc = emitted("linuxcnc-xyuv", "wing", "wrong-dialect");
+    let why = c.check_program(&linuxcnc, 0).unwrap_err();
+    assert!(why.contains("\"linuxcnc\""), "{why}");
+    let why = c.check_program(&program, 1_000_000).unwrap_err();
+    assert!(why.contains("start_line 1000000"), "{why}");
+    let controllers = [c];
+    let why = cell_bridge::controller::choose(&controllers, 0, "lathe", &program).unwrap_err();
+    assert!(
+        why.contains("\"lathe\"") && why.contains("(it has c)"),
+        "{why}"
+    );
+
+    let robot = Controller::start(ControllerSpec::resolve("abb-irb2600-waam-sim").unwrap())
+        .await
+        .unwrap();
+    let why = robot.check_program(&program, 0).unwrap_err();
+    assert!(why.contains("RAPID"), "{why}");
+    assert_eq!(
+        robot.check_program(&emitted("abb-irb2600-waam", "wall", "wall"), 0),
+        Ok(())
+    );
+    assert!(sim.executed_lines().is_empty(), "nothing was sent");
+}

@@ -1,0 +1,94 @@
+//! Real-time commands, acted on as their byte arrives: status report, feed hold, cycle start
+//! (after the hold completes), soft reset (`ALARM:3` when reset in motion, the banner,
+//! `[MSG:'$H'|'$X' to unlock]`), jog cancel and the overrides.
+
+use crate::protocol::{MachineState, Realtime};
+
+use super::machine::Machine;
+use super::{SimEvent, BANNER};
+
+impl Machine {
+    /// Acts on a real-time command as it arrives.
+    pub(super) fn realtime(&mut self, rt: Realtime) {
+        self.event(SimEvent::Realtime {
+            command: rt,
+            state: self.state,
+            at_s: self.t,
+        });
+        match rt {
+            Realtime::StatusQuery => {
+                let r = self.status_report();
+                self.emit(&r);
+            }
+            Realtime::FeedHold => self.feed_hold(),
+            Realtime::CycleStart => {
+                if self.hold_complete && matches!(self.state, MachineState::Hold(_)) {
+                    self.hold = None;
+                    self.hold_complete = false;
+                    self.state = if self.queue.is_empty() {
+                        MachineState::Idle
+                    } else {
+                        MachineState::Run
+                    };
+                }
+            }
+            Realtime::SoftReset => self.soft_reset(),
+            Realtime::JogCancel => self.jog_cancel(),
+            Realtime::FeedOverrideReset
+            | Realtime::FeedOverridePlus10
+            | Realtime::FeedOverrideMinus10
+            | Realtime::FeedOverridePlus1
+            | Realtime::FeedOverrideMinus1
+            | Realtime::RapidOverride100
+            | Realtime::RapidOverride50
+            | Realtime::RapidOverride25
+            | Realtime::SpindleOverrideReset
+            | Realtime::SpindleOverridePlus10
+            | Realtime::SpindleOverrideMinus10
+            | Realtime::SpindleOverridePlus1
+            | Realtime::SpindleOverrideMinus1 => self.overrides.apply(rt),
+            Realtime::SafetyDoor
+            | Realtime::SpindleStopToggle
+            | Realtime::FloodToggle
+            | Realtime::MistToggle => {}
+        }
+    }
+
+    /// Ctrl-X: motion, buffers and modal state reset; `ALARM:3` if it was moving.
+    pub(super) fn soft_reset(&mut self) {
+        // Moving: a block executing (not held to a stop) or decelerating into a hold.
+        let in_motion = self.moving();
+        self.event(SimEvent::Reset {
+            in_motion,
+            at_s: self.t,
+        });
+        self.flush_motion();
+        self.rx.clear();
+        self.clear_line();
+        self.pending = None;
+        self.delayed.clear();
+        self.busy_until = self.t;
+        self.hold = None;
+        self.hold_complete = false;
+        self.jog_cancel = false;
+        self.check_mode = false;
+        self.overrides.reset();
+        self.modal = self.modal.reset(self.pos.clone());
+        if in_motion {
+            self.state = MachineState::Alarm;
+            self.event(SimEvent::Alarm {
+                code: 3,
+                at_s: self.t,
+            });
+            self.emit("ALARM:3");
+        }
+        self.critical_lock = false;
+        if self.state != MachineState::Alarm {
+            self.state = MachineState::Idle;
+        }
+        self.emit(&format!("\r\n{BANNER}"));
+        if self.state == MachineState::Alarm {
+            self.emit("[MSG:'$H'|'$X' to unlock]");
+        }
+    }
+}

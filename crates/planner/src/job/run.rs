@@ -1,0 +1,424 @@
+//! Orchestration: one job from spec to plan (foil → offset → baseline → swarm → synchronised
+//! sections → carriage moves).
+
+use std::ops::ControlFlow;
+use std::time::Instant;
+
+use nalgebra::{Point2, Vector2};
+
+use crate::airfoil::{Airfoil, SyncedPoints};
+use crate::exposure::Panels;
+use crate::pso::{self, Objective, Problem, PsoConfig, PsoError};
+use crate::trajectory::{is_feasible, Baseline};
+use crate::wing::{synchronise_paths, Placement, Towers};
+
+use super::live::Live;
+use super::motion::{check_envelope, Mover};
+use super::process::process;
+use super::spec::two_axis;
+use super::{
+    validate, ExposureStats, HotwireJob, HotwirePlan, JobError, JobProgress, LiveMaps, LiveOptions,
+    SectionPlan, SECTION_FRAME_ID, TIP_FRAME_ID,
+};
+
+/// Plans `job` (module docs). `progress` is called after every iteration; returning
+/// [`ControlFlow::Break`] stops the run with [`JobError::Cancelled`].
+///
+/// # Errors
+/// Invalid parameters (named), an unknown or malformed airfoil (named, with file and line),
+/// an infeasible baseline or other planning failure (with the airfoil), a path outside the
+/// machine's travel, cancellation.
+pub fn plan(
+    job: &HotwireJob,
+    progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
+) -> Result<HotwirePlan, JobError> {
+    plan_observed(job, &LiveOptions::default(), |_| {}, progress)
+}
+
+/// What [`plan_section`] needs besides the foil.
+struct SectionJob<'a> {
+    job: &'a HotwireJob,
+    name: &'a str,
+    offset_mm: f64,
+    /// Frame id of its heat maps.
+    frame_id: &'static str,
+    /// Iterations already run by earlier sections, and the total over all sections.
+    iterations_before: usize,
+    iterations_total: usize,
+    started: Instant,
+}
+
+/// Plans one section (`foil`: normalised and scaled to `chord_mm`): baseline at `offset_mm`,
+/// swarm, exposure before and after.
+fn plan_section(
+    s: &SectionJob<'_>,
+    foil: &Airfoil,
+    chord_mm: f64,
+    live: &mut Live<'_, impl FnMut(LiveMaps)>,
+    progress: &mut impl FnMut(&JobProgress) -> ControlFlow<()>,
+) -> Result<(SectionPlan, usize), JobError> {
+    let job = s.job;
+    let wrap = |source: PsoError| JobError::Plan {
+        airfoil: s.name.to_string(),
+        source,
+    };
+    let path_points = if job.path_points == 0 {
+        job.panels + job.panels / 2
+    } else {
+        job.path_points
+    };
+    let baseline =
+        Baseline::fixed_offset(foil, s.offset_mm, path_points).map_err(|e| wrap(e.into()))?;
+    let objective = Objective {
+        cse: job.cse,
+        // Only the root's feed is a variable: the wire has one timing for both faces.
+        feed: if s.frame_id == SECTION_FRAME_ID {
+            job.objective.feed
+        } else {
+            None
+        },
+        ..job.objective
+    };
+    // A sharp trailing edge repeats its point at both ends: one more point gives N panels.
+    let surface_points = surface_points(foil, job.panels)?;
+    let problem = Problem::new(foil, surface_points, baseline, objective).map_err(wrap)?;
+    let k = problem.trajectory().control_points();
+    let baseline_exposure = problem.exposure(&vec![0.0; k]).map_err(wrap)?;
+    live.show(&problem, &vec![0.0; k], 0, s.frame_id);
+    let config = PsoConfig {
+        seed: job.seed,
+        ..job.pso
+    };
+    let result = pso::optimise(&problem, &config, |p| {
+        let done = s.iterations_before + p.iteration;
+        if p.improved && live.due() {
+            live.show(&problem, p.best_controls, done, s.frame_id);
+        }
+        let elapsed = s.started.elapsed().as_secs_f64();
+        let eta_s = elapsed / done.max(1) as f64 * s.iterations_total.saturating_sub(done) as f64;
+        progress(&JobProgress {
+            iteration: done,
+            total: s.iterations_total,
+            best_loss: p.best_loss,
+            eta_s,
+        })
+    })
+    .map_err(wrap)?;
+    if result.cancelled {
+        return Err(JobError::Cancelled {
+            iteration: s.iterations_before + result.iterations_run,
+        });
+    }
+    let optimised = problem.path(&result.controls);
+    let optimised_exposure = problem.exposure(&result.controls).map_err(wrap)?;
+    let cse = problem.cse();
+    // Point k is reached by segment k − 1; point 0 takes segment 0's ratio.
+    let segment_ratios = problem.feed_ratios(&result.controls);
+    let mut feed_ratio = Vec::with_capacity(optimised.len());
+    feed_ratio.push(segment_ratios.first().copied().unwrap_or(1.0));
+    feed_ratio.extend_from_slice(&segment_ratios);
+    let plan = SectionPlan {
+        feed_ratio,
+        airfoil: foil.name().to_string(),
+        chord_mm,
+        foil: foil.points().to_vec(),
+        surface: foil.resampled_cosine(surface_points)?.points().to_vec(),
+        baseline: problem.path(&vec![0.0; k]),
+        optimised,
+        offset_mm: s.offset_mm,
+        cse,
+        baseline_stats: ExposureStats::of(&baseline_exposure, cse),
+        optimised_stats: ExposureStats::of(&optimised_exposure, cse),
+        baseline_exposure,
+        optimised_exposure,
+        baseline_loss: result.baseline_loss,
+        final_loss: result.best_loss,
+        loss_history: result.history,
+    };
+    Ok((plan, result.iterations_run))
+}
+
+/// Closed perimeter of a foil (mm).
+fn perimeter_mm(foil: &Airfoil) -> f64 {
+    cell_geometry::ring_perimeter(foil.points(), cell_geometry::Norm::Sqrt)
+}
+
+/// [`plan`], also handing `on_maps` the exposure profile and the wire × panel matrix of the
+/// baseline before each section's swarm starts, and of the best path so far whenever it
+/// improved and at least [`LiveOptions::period`] has passed, so a caller can show the
+/// optimisation as it runs.
+///
+/// On a tapered panel both sections are optimised (root first, then tip, each with the full
+/// iteration count). The faster face is cut at [`HotwireJob::feed_mm_s`] with the kerf-model
+/// offset; the slower face moves slower by the ratio of the perimeters and, at the one wire
+/// current, melts a kerf wider by the inverse ratio (seed 001 eq. 5: λ ∝ 1/v), so its baseline
+/// offset is scaled up by that ratio.
+///
+/// # Errors
+/// As [`plan`].
+pub fn plan_observed(
+    job: &HotwireJob,
+    options: &LiveOptions,
+    on_maps: impl FnMut(LiveMaps),
+    mut progress: impl FnMut(&JobProgress) -> ControlFlow<()>,
+) -> Result<HotwirePlan, JobError> {
+    let mut live = Live {
+        options,
+        last: None,
+        sink: on_maps,
+    };
+    validate(job)?;
+    let hw = job
+        .machine
+        .hotwire
+        .as_ref()
+        .expect("validate checked the hotwire section");
+    let four_axis = job.machine.is_four_axis_hotwire();
+    let root_loaded = job.root_airfoil.load()?;
+    let root_foil = root_loaded.normalised().scaled(job.chord_mm)?;
+    // The tip, normalised and scaled, unless it is the root again (a straight cut).
+    let tip = match &job.tip {
+        Some(t) => {
+            let loaded = t.airfoil.load()?;
+            let straight = loaded.points() == root_loaded.points()
+                && t.chord_mm == job.chord_mm
+                && t.placement.sweep_mm == 0.0
+                && t.placement.twist_deg == 0.0;
+            if straight {
+                None
+            } else {
+                Some((t, loaded.normalised().scaled(t.chord_mm)?))
+            }
+        }
+        None => None,
+    };
+    if tip.is_some() && !four_axis {
+        return Err(two_axis(&job.machine));
+    }
+    let proc = process(job, hw)?;
+    let mut notes = proc.notes.clone();
+
+    // Offsets: the longer section is the faster face (nominal offset), the other is wider.
+    let (root_offset, tip_offset) = match &tip {
+        Some((_, tip_foil)) => {
+            let ratio = perimeter_mm(&root_foil) / perimeter_mm(tip_foil);
+            if ratio >= 1.0 {
+                (proc.offset_mm, proc.offset_mm * ratio)
+            } else {
+                (proc.offset_mm / ratio, proc.offset_mm)
+            }
+        }
+        None => (proc.offset_mm, proc.offset_mm),
+    };
+    let sections = if tip.is_some() { 2 } else { 1 };
+    let started = Instant::now();
+    let root_name = job.root_airfoil.to_string();
+    let section_job = |name, offset_mm, frame_id, before| SectionJob {
+        job,
+        name,
+        offset_mm,
+        frame_id,
+        iterations_before: before,
+        iterations_total: job.pso.iterations * sections,
+        started,
+    };
+    let (mut root, mut iterations) = plan_section(
+        &section_job(&root_name, root_offset, SECTION_FRAME_ID, 0),
+        &root_foil,
+        job.chord_mm,
+        &mut live,
+        &mut progress,
+    )?;
+    let tip_plan = match &tip {
+        Some((t, tip_foil)) => {
+            let name = t.airfoil.to_string();
+            let (plan, n) = plan_section(
+                &section_job(&name, tip_offset, TIP_FRAME_ID, iterations),
+                tip_foil,
+                t.chord_mm,
+                &mut live,
+                &mut progress,
+            )?;
+            iterations += n;
+            Some(plan)
+        }
+        None => None,
+    };
+    let seconds = started.elapsed().as_secs_f64();
+
+    // Point-for-point root and tip paths, in each section's frame.
+    let (root_cut, tip_cut) = match &tip_plan {
+        Some(t) => {
+            let (r, tp) = synchronised(job, &root, t)?;
+            Some((r, tp))
+        }
+        None => None,
+    }
+    .unwrap_or_else(|| (root.optimised.clone(), root.optimised.clone()));
+    let mut tip_plan = tip_plan;
+    // Feed ratios at the cut points: as optimised, or carried onto the resampled points by arc
+    // length (the resampled points lie on the optimised path).
+    let cut_ratios = if tip_plan.is_some() {
+        along_arc(&root.optimised, &root.feed_ratio, &root_cut)
+    } else {
+        root.feed_ratio.clone()
+    };
+    if let Some(t) = tip_plan.as_mut() {
+        refresh_exposure(job, &mut root, &root_cut, &cut_ratios)?;
+        refresh_exposure(job, t, &tip_cut, &vec![1.0; tip_cut.len()])?;
+    }
+
+    // Leads: straight along each chord line, from behind the TE.
+    let behind_te = |s: &SectionPlan| {
+        let foil = &s.foil;
+        let te = nalgebra::center(&foil[0], &foil[foil.len() - 1]);
+        te + Vector2::new(job.lead_in_mm + s.offset_mm, 0.0)
+    };
+    let root_out = behind_te(&root);
+    let (tip_section, tip_chord, placement) = match (&tip_plan, &tip) {
+        (Some(t), Some((spec, _))) => (t, t.chord_mm, spec.placement),
+        _ => (&root, job.chord_mm, Placement::ROOT),
+    };
+    let tip_out = behind_te(tip_section);
+    let origin = Vector2::new(hw.part_origin_mm[0], hw.part_origin_mm[1]);
+    let towers = Towers {
+        separation_mm: hw.tower_separation_mm,
+        root_plane_mm: hw.root_plane_mm,
+        tip_plane_mm: hw.root_plane_mm + job.span_mm,
+    };
+    let place = |r: &[Point2<f64>], t: &[Point2<f64>]| -> (Vec<Point2<f64>>, Vec<Point2<f64>>) {
+        r.iter()
+            .zip(t)
+            .map(|(r, t)| (r + origin, placement.apply(tip_chord, *t) + origin))
+            .unzip()
+    };
+    let mover = Mover {
+        towers,
+        feed_mm_s: job.feed_mm_s,
+        max_feed_mm_s: job.machine.max_feed_mm_s,
+        // With the feed a variable the current stays constant (see `FeedVariable`).
+        schedule: proc.schedule.filter(|_| job.objective.feed.is_none()),
+        supply: proc.supply,
+        current_a: job.current_a,
+    };
+    let (r, t) = place(&[root_out, root_cut[0]], &[tip_out, tip_cut[0]]);
+    let lead_in = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
+    let (r, t) = place(&root_cut, &tip_cut);
+    let cut = mover.motion(&r, &t, &cut_ratios, &mut notes)?;
+    let last = root_cut.len() - 1;
+    let (r, t) = place(&[root_cut[last], root_out], &[tip_cut[last], tip_out]);
+    let lead_out = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
+    for (what, m) in [
+        ("lead-in", &lead_in),
+        ("cut", &cut),
+        ("lead-out", &lead_out),
+    ] {
+        check_envelope(&job.machine, four_axis, what, m)?;
+    }
+    root.optimised = root_cut;
+    if let Some(t) = tip_plan.as_mut() {
+        t.optimised = tip_cut;
+    }
+    Ok(HotwirePlan {
+        root,
+        model: job.objective.model,
+        tip: tip_plan,
+        iterations,
+        seconds,
+        seed: job.seed,
+        machine: job.machine.name.clone(),
+        towers,
+        part_origin: origin,
+        tip_placement: placement,
+        four_axis,
+        lead_in,
+        cut,
+        lead_out,
+        notes,
+    })
+}
+
+/// Resamples the two optimised paths point for point ([`synchronise_paths`]) finely enough
+/// that both keep the clearance (3×, then up to 12× the longer path's point count).
+fn synchronised(
+    job: &HotwireJob,
+    root: &SectionPlan,
+    tip: &SectionPlan,
+) -> Result<SyncedPoints, JobError> {
+    let base = root.optimised.len().max(tip.optimised.len());
+    let clearance = job.objective.min_clearance_mm;
+    let mut last_gap = 0.0;
+    for factor in [3, 6, 12] {
+        let (r, t) = synchronise_paths(&root.optimised, &tip.optimised, base * factor + 1)?;
+        if is_feasible(&r, &root.foil, clearance) && is_feasible(&t, &tip.foil, clearance) {
+            return Ok((r, t));
+        }
+        last_gap = crate::trajectory::clearance_mm(&r, &root.foil, f64::INFINITY).min(
+            crate::trajectory::clearance_mm(&t, &tip.foil, f64::INFINITY),
+        );
+    }
+    Err(JobError::Plan {
+        airfoil: root.airfoil.clone(),
+        source: PsoError::InfeasibleBaseline {
+            clearance_mm: last_gap,
+        },
+    })
+}
+
+/// `values` (one per point of `path`) carried onto `onto` (points lying on `path`) by
+/// normalised arc length, linearly interpolated.
+fn along_arc(path: &[Point2<f64>], values: &[f64], onto: &[Point2<f64>]) -> Vec<f64> {
+    let arc = |p: &[Point2<f64>]| {
+        let mut s = vec![0.0];
+        for w in p.windows(2) {
+            s.push(s[s.len() - 1] + (w[1] - w[0]).norm());
+        }
+        let total = s[s.len() - 1].max(f64::MIN_POSITIVE);
+        s.iter().map(|v| v / total).collect::<Vec<f64>>()
+    };
+    let (from, to) = (arc(path), arc(onto));
+    to.iter()
+        .map(|&u| {
+            let j = from.partition_point(|&v| v < u).clamp(1, from.len() - 1);
+            let (u0, u1) = (from[j - 1], from[j]);
+            let t = if u1 > u0 { (u - u0) / (u1 - u0) } else { 0.0 };
+            values[j - 1] + t * (values[j] - values[j - 1])
+        })
+        .collect()
+}
+
+/// Recomputes a section's optimised exposure and statistics along `path` (the resampled path
+/// the wire really follows) with feed ratio `ratios` at its points.
+fn refresh_exposure(
+    job: &HotwireJob,
+    section: &mut SectionPlan,
+    path: &[Point2<f64>],
+    ratios: &[f64],
+) -> Result<(), JobError> {
+    let wrap = |e: crate::exposure::ExposureError| JobError::Plan {
+        airfoil: section.airfoil.clone(),
+        source: e.into(),
+    };
+    let panels = Panels::from_points(&section.surface).map_err(wrap)?;
+    let mut wire = crate::exposure::WireSegments::from_points(path).map_err(wrap)?;
+    let weights: Vec<f64> = ratios[1..].iter().map(|r| 1.0 / r).collect();
+    wire.set_weights(&weights).map_err(wrap)?;
+    section.optimised_exposure = vec![0.0; panels.len()];
+    job.objective
+        .model
+        .exposure_into(&panels, &wire, &mut section.optimised_exposure)
+        .map_err(wrap)?;
+    section.optimised_stats = ExposureStats::of(&section.optimised_exposure, section.cse);
+    Ok(())
+}
+
+/// How many resampled points give `panels` distinct surface panels on `foil`.
+fn surface_points(foil: &Airfoil, panels: usize) -> Result<usize, JobError> {
+    let probe = foil.resampled_cosine(panels)?;
+    let pts = probe.points();
+    Ok(if pts.first() == pts.last() {
+        panels + 1
+    } else {
+        panels
+    })
+}

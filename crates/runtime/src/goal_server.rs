@@ -1,0 +1,354 @@
+//! One action-goal server for every node: a [`GoalHandler`] says what a goal means and does;
+//! [`serve`] owns the ROS 2 action protocol around it.
+//!
+//! Per goal, [`serve`]:
+//! 1. names it ([`GoalHandler::job_id`]) and checks it ([`GoalHandler::validate`]); a goal that
+//!    fails the check is **rejected before it is accepted**, its reason logged (ROS 2
+//!    rejections carry no text);
+//! 2. accepts it, starts executing it and runs [`GoalHandler::run`] on its own task with a
+//!    [`GoalContext`]: feedback sent through the context is published in order, and a cancel
+//!    request for the goal is accepted and shows in [`GoalContext::is_canceled`] (and completes
+//!    [`GoalContext::canceled`]);
+//! 3. once the run ends, sends its result when the client asks for it, for up to
+//!    [`ServeOptions::result_timeout`] (a client may ask late, or before the goal ends), and
+//!    then gives up with a warning ("nobody asked for the result of …"), so a client that went
+//!    away holds nothing up.
+//!
+//! Goals run one at a time, in arrival order (a goal sent meanwhile waits for the running one
+//! to end before it is read), unless [`ServeOptions::concurrent`] is set. Cancel requests are
+//! answered at any time: accepted for running goals, refused for anything else (a goal not yet
+//! run, or one that ended and waits for its client). On shutdown no new goal is read; the
+//! running ones end as their handler decides (it may watch [`crate::Shutdown`]) and then
+//! [`serve`] returns.
+//!
+//! A handler whose work is a blocking computation runs it with [`GoalContext::run_blocking`];
+//! one whose work is async I/O (a machine run) awaits it in [`GoalHandler::run`] directly.
+
+use std::{collections::BTreeMap, future::Future, sync::Arc, time::Duration};
+
+use anyhow::anyhow;
+use cell_msgs::RosMessage;
+use futures::{stream::FuturesUnordered, FutureExt, StreamExt};
+use tokio::sync::mpsc;
+use tokio_util::sync::CancellationToken;
+
+use crate::action::{AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId};
+use crate::node::CellNode;
+
+/// What a node's action does with a goal (module docs).
+pub trait GoalHandler: Send + Sync + 'static {
+    /// The action's goal message.
+    type Goal: RosMessage + ros2_client::Message;
+    /// The action's result message.
+    type Result: RosMessage + ros2_client::Message;
+    /// The action's feedback message.
+    type Feedback: RosMessage + ros2_client::Message;
+    /// What a valid goal becomes: everything [`GoalHandler::run`] needs.
+    type Job: Send + 'static;
+
+    /// The id of a goal in log lines and in what it produces: the goal's own, or one made from
+    /// `served`, the goal's arrival number (1 for the first goal the node read).
+    fn job_id(&self, goal: &Self::Goal, served: u64) -> String;
+
+    /// Checks a goal before it is accepted: the job to run, or why the goal is rejected (one
+    /// line naming the field or file).
+    ///
+    /// # Errors
+    /// Anything that makes the goal unrunnable as given.
+    fn validate(&self, goal: &Self::Goal, job_id: &str) -> Result<Self::Job, String>;
+
+    /// Runs an accepted goal to its end: its status (succeeded, aborted with the reason in the
+    /// result, canceled) and result.
+    ///
+    /// # Errors
+    /// Only what the node cannot go on after (a topic it cannot publish on): [`serve`] returns
+    /// the error and the node stops. A goal that fails ends as aborted instead.
+    fn run(
+        &self,
+        job: Self::Job,
+        ctx: GoalContext<Self::Feedback>,
+    ) -> impl Future<Output = anyhow::Result<GoalEnd<Self::Result>>> + Send;
+}
+
+/// How a goal ended: the status its client sees and the result it gets.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GoalEnd<R> {
+    /// Succeeded, aborted or canceled.
+    pub status: GoalEndStatus,
+    /// The result message.
+    pub result: R,
+}
+
+impl<R> GoalEnd<R> {
+    /// The goal did what it was asked.
+    pub fn succeeded(result: R) -> Self {
+        Self {
+            status: GoalEndStatus::Succeeded,
+            result,
+        }
+    }
+
+    /// The goal failed; the result says why.
+    pub fn aborted(result: R) -> Self {
+        Self {
+            status: GoalEndStatus::Aborted,
+            result,
+        }
+    }
+
+    /// The goal stopped because its client asked.
+    pub fn canceled(result: R) -> Self {
+        Self {
+            status: GoalEndStatus::Canceled,
+            result,
+        }
+    }
+}
+
+/// What a running goal's handler holds: its id, a feedback channel, its cancel state. Cheap to
+/// clone; usable from a blocking thread.
+#[derive(Debug)]
+pub struct GoalContext<F> {
+    job_id: Arc<str>,
+    feedback: mpsc::UnboundedSender<F>,
+    cancel: CancellationToken,
+}
+
+// Not derived: a derive would ask for `F: Clone`.
+impl<F> Clone for GoalContext<F> {
+    fn clone(&self) -> Self {
+        Self {
+            job_id: self.job_id.clone(),
+            feedback: self.feedback.clone(),
+            cancel: self.cancel.clone(),
+        }
+    }
+}
+
+impl<F: Send + 'static> GoalContext<F> {
+    /// The goal's id ([`GoalHandler::job_id`]).
+    pub fn job_id(&self) -> &str {
+        &self.job_id
+    }
+
+    /// Queues a feedback message; [`serve`] publishes it, in order, while the goal executes.
+    /// Never blocks. Feedback after an accepted cancel is dropped (ROS 2 sends feedback only
+    /// for an executing goal).
+    pub fn feedback(&self, feedback: F) {
+        // The receiver lives until the run ends, so a send cannot fail while it matters.
+        let _ = self.feedback.send(feedback);
+    }
+
+    /// Whether the goal's client asked to cancel it (and the cancel was accepted).
+    pub fn is_canceled(&self) -> bool {
+        self.cancel.is_cancelled()
+    }
+
+    /// Completes once the goal's client asks to cancel it.
+    pub async fn canceled(&self) {
+        self.cancel.cancelled().await
+    }
+
+    /// Runs `work` on a blocking thread (a computation that would stall the async runtime),
+    /// handing it a clone of this context for feedback and cancel checks; its return value.
+    ///
+    /// # Errors
+    /// `work` panicked.
+    pub async fn run_blocking<T: Send + 'static>(
+        &self,
+        work: impl FnOnce(&GoalContext<F>) -> T + Send + 'static,
+    ) -> anyhow::Result<T> {
+        let ctx = self.clone();
+        tokio::task::spawn_blocking(move || work(&ctx))
+            .await
+            .map_err(|e| anyhow!("{}: the goal's thread failed: {e}", self.job_id))
+    }
+}
+
+/// How [`serve`] runs goals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServeOptions {
+    /// How long a finished goal's result waits for its client to ask for it.
+    pub result_timeout: Duration,
+    /// Run goals side by side, each on its own task, instead of one at a time.
+    pub concurrent: bool,
+}
+
+impl ServeOptions {
+    /// One goal at a time, in arrival order; results kept `result_timeout_s` seconds (a
+    /// negative or NaN value is 0, an infinite one forever).
+    pub fn one_at_a_time(result_timeout_s: f64) -> Self {
+        Self {
+            result_timeout: Duration::try_from_secs_f64(result_timeout_s.max(0.0))
+                .unwrap_or(Duration::MAX),
+            concurrent: false,
+        }
+    }
+
+    /// Every goal as soon as it arrives, side by side (the handler refuses what cannot run
+    /// alongside); results kept as [`ServeOptions::one_at_a_time`] says.
+    pub fn concurrent(result_timeout_s: f64) -> Self {
+        Self {
+            concurrent: true,
+            ..Self::one_at_a_time(result_timeout_s)
+        }
+    }
+}
+
+type Server<H> = AsyncActionServer<
+    <H as GoalHandler>::Goal,
+    <H as GoalHandler>::Result,
+    <H as GoalHandler>::Feedback,
+>;
+
+/// A goal [`serve`] runs: what it needs to cancel it and to answer for it.
+struct Running<G> {
+    job_id: String,
+    cancel: CancellationToken,
+    executing: ExecutingGoalHandle<G>,
+}
+
+/// Serves the action `action` (resolved against namespace and remappings) with `handler` until
+/// the node shuts down (module docs). Log lines start with `action` as given.
+///
+/// # Errors
+/// The action server cannot be created; a handler's run returned an error or panicked.
+pub async fn serve<H: GoalHandler>(
+    node: CellNode,
+    action: &str,
+    handler: H,
+    options: ServeOptions,
+) -> anyhow::Result<()> {
+    let server: Arc<Server<H>> = Arc::new(node.action_server(action)?);
+    let handler = Arc::new(handler);
+    let mut running: BTreeMap<GoalId, Running<H::Goal>> = BTreeMap::new();
+    let mut runs = FuturesUnordered::new();
+    let mut served = 0u64;
+    let mut stopping = false;
+    loop {
+        let idle = running.is_empty();
+        if stopping && idle {
+            return Ok(());
+        }
+        tokio::select! {
+            handle = server.receive_new_goal(), if !stopping && (idle || options.concurrent) => {
+                let handle = match handle {
+                    Ok(h) => h,
+                    Err(e) => {
+                        tracing::warn!("{action}: cannot read a goal: {e:?}");
+                        continue;
+                    }
+                };
+                let Some(goal) = server.get_new_goal(handle.clone()) else {
+                    tracing::warn!("{action}: goal without a body");
+                    continue;
+                };
+                served += 1;
+                let job_id = handler.job_id(&goal, served);
+                let job = match handler.validate(&goal, &job_id) {
+                    Ok(job) => job,
+                    Err(why) => {
+                        tracing::warn!("{action}: rejecting goal {job_id}: {why}");
+                        if let Err(e) = server.reject_goal(handle).await {
+                            tracing::warn!("{action}: reject {job_id}: {e:?}");
+                        }
+                        continue;
+                    }
+                };
+                let accepted = match server.accept_goal(handle).await {
+                    Ok(a) => a,
+                    Err(e) => {
+                        tracing::warn!("{action}: accept {job_id}: {e:?}");
+                        continue;
+                    }
+                };
+                let executing = match server.start_executing_goal(accepted).await {
+                    Ok(x) => x,
+                    Err(e) => {
+                        tracing::warn!("{action}: execute {job_id}: {e:?}");
+                        continue;
+                    }
+                };
+                let goal_id = executing.goal_id();
+                let cancel = CancellationToken::new();
+                let run = tokio::spawn(run_goal(
+                    handler.clone(),
+                    server.clone(),
+                    executing.clone(),
+                    job,
+                    job_id.as_str().into(),
+                    cancel.clone(),
+                    action.to_owned(),
+                ));
+                runs.push(run.map(move |ended| (goal_id, ended)));
+                running.insert(goal_id, Running { job_id, cancel, executing });
+            }
+            cancel = server.receive_cancel_request() => {
+                let Ok(cancel) = cancel else { continue };
+                let ours: Vec<GoalId> = running
+                    .keys()
+                    .copied()
+                    .filter(|g| cancel.contains_goal(g))
+                    .collect();
+                for g in &ours {
+                    let goal = &running[g];
+                    tracing::info!("{action}: cancelling {}", goal.job_id);
+                    goal.cancel.cancel();
+                }
+                if let Err(e) = server.respond_to_cancel_requests(&cancel, ours.into_iter()).await {
+                    tracing::warn!("{action}: cancel response: {e:?}");
+                }
+            }
+            Some((goal_id, ended)) = runs.next(), if !idle => {
+                let Running { job_id, executing, .. } =
+                    running.remove(&goal_id).expect("every run is registered");
+                let end = ended
+                    .map_err(|e| anyhow!("{action}: goal {job_id}: {e}"))
+                    .and_then(|end| end)?;
+                // The result goes out once the client asks for it; do not hold up the next goal.
+                let (server, wait, action) = (server.clone(), options.result_timeout, action.to_owned());
+                tokio::spawn(async move {
+                    let send = server.send_result_response(executing, end.status, end.result);
+                    match tokio::time::timeout(wait, send).await {
+                        Ok(Ok(())) => {}
+                        Ok(Err(e)) => tracing::warn!("{action}: result {job_id}: {e:?}"),
+                        Err(_) => tracing::warn!("{action}: nobody asked for the result of {job_id}"),
+                    }
+                });
+            }
+            _ = node.shutdown().requested(), if !stopping => stopping = true,
+        }
+    }
+}
+
+/// One goal's task: the handler's run, and its feedback published while it runs.
+async fn run_goal<H: GoalHandler>(
+    handler: Arc<H>,
+    server: Arc<Server<H>>,
+    executing: ExecutingGoalHandle<H::Goal>,
+    job: H::Job,
+    job_id: Arc<str>,
+    cancel: CancellationToken,
+    action: String,
+) -> anyhow::Result<GoalEnd<H::Result>> {
+    let (feedback, mut feedback_rx) = mpsc::unbounded_channel();
+    let ctx = GoalContext {
+        job_id: job_id.clone(),
+        feedback,
+        cancel: cancel.clone(),
+    };
+    let run = handler.run(job, ctx);
+    // Ends once the run and every clone of its context are gone, after the last feedback.
+    let publish = async {
+        while let Some(feedback) = feedback_rx.recv().await {
+            if cancel.is_cancelled() {
+                continue;
+            }
+            if let Err(e) = server.publish_feedback(executing.clone(), feedback).await {
+                tracing::warn!("{action}: feedback {job_id}: {e:?}");
+            }
+        }
+    };
+    let (end, ()) = tokio::join!(run, publish);
+    end
+}

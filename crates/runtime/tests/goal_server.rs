@@ -1,0 +1,260 @@
+//! The goal server over real DDS, two in-process nodes on loopback: a goal that fails its
+//! check is rejected before it is accepted, a good one streams feedback and succeeds, a result
+//! asked for after its goal ended still arrives, a cancel is honoured, and the server returns
+//! once its node shuts down; an async handler serves goals side by side.
+
+use std::time::Duration;
+
+use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
+use cell_runtime::action::{request_result, ActionClient, GoalStatusEnum};
+use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::{CellNode, FastPathMode, NodeSetup};
+use futures::StreamExt;
+
+/// Generous bound for discovery and delivery on a loaded 2-core machine.
+const PATIENCE: Duration = Duration::from_secs(30);
+
+/// A domain no concurrently running test binary of the workspace is likely to use (the root
+/// package's integration tests pick theirs the same way).
+fn domain(n: u16) -> u16 {
+    100 + (std::process::id() % 8) as u16 * 16 + 15 - n
+}
+
+fn node(name: &str, domain: u16) -> (CellNode, cell_runtime::Shutdown) {
+    let mut setup = NodeSetup::local(name, domain);
+    setup.fast_path = FastPathMode::Off;
+    let shutdown = setup.shutdown.clone();
+    (CellNode::new(setup).expect("node comes up"), shutdown)
+}
+
+/// Counts `iterations` steps of 20 ms on a blocking thread, one feedback per step, stopping
+/// early on cancel. Rejects a goal whose chord is not > 0.
+struct Counter;
+
+impl GoalHandler for Counter {
+    type Goal = PlanHotwireGoal;
+    type Result = PlanHotwireResult;
+    type Feedback = PlanHotwireFeedback;
+    type Job = u32;
+
+    fn job_id(&self, goal: &PlanHotwireGoal, served: u64) -> String {
+        if goal.job_id.is_empty() {
+            format!("count-{served}")
+        } else {
+            goal.job_id.clone()
+        }
+    }
+
+    fn validate(&self, goal: &PlanHotwireGoal, _job_id: &str) -> Result<u32, String> {
+        if goal.root_chord_mm > 0.0 {
+            Ok(goal.iterations)
+        } else {
+            Err(format!("root_chord_mm {}: must be > 0", goal.root_chord_mm))
+        }
+    }
+
+    async fn run(
+        &self,
+        iterations: u32,
+        ctx: GoalContext<PlanHotwireFeedback>,
+    ) -> anyhow::Result<GoalEnd<PlanHotwireResult>> {
+        let done = ctx
+            .run_blocking(move |ctx| {
+                for i in 1..=iterations {
+                    if ctx.is_canceled() {
+                        return i - 1;
+                    }
+                    ctx.feedback(PlanHotwireFeedback {
+                        iteration: i,
+                        total_iterations: iterations,
+                        ..Default::default()
+                    });
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                iterations
+            })
+            .await?;
+        let result = PlanHotwireResult {
+            success: done == iterations,
+            message: format!("{}: {done} of {iterations}", ctx.job_id()),
+            ..Default::default()
+        };
+        Ok(if ctx.is_canceled() {
+            GoalEnd::canceled(result)
+        } else {
+            GoalEnd::succeeded(result)
+        })
+    }
+}
+
+type Client = ActionClient<PlanHotwireGoal, PlanHotwireResult, PlanHotwireFeedback>;
+
+fn goal(chord: f64, iterations: u32) -> PlanHotwireGoal {
+    PlanHotwireGoal {
+        root_chord_mm: chord,
+        iterations,
+        ..Default::default()
+    }
+}
+
+async fn result_of(
+    client: &Client,
+    goal_id: cell_runtime::action::GoalId,
+) -> (GoalStatusEnum, PlanHotwireResult) {
+    request_result(client, goal_id, 3 * PATIENCE, 3 * PATIENCE)
+        .await
+        .expect("result")
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn goals_are_checked_run_canceled_and_answered_late() {
+    let domain = domain(0);
+    let (server_node, shutdown) = node("counter", domain);
+    let (client_node, _) = node("operator", domain);
+    let serving = tokio::spawn(goal_server::serve(
+        server_node,
+        "/count",
+        Counter,
+        ServeOptions::one_at_a_time(60.0),
+    ));
+    let client: Client = client_node.action_client("/count").unwrap();
+    assert!(
+        client_node.wait_for_action_server("/count", PATIENCE).await,
+        "action server never discovered"
+    );
+    let send = |g: PlanHotwireGoal| async {
+        tokio::time::timeout(PATIENCE, client.async_send_goal(g))
+            .await
+            .expect("goal answered in time")
+            .expect("goal sent")
+    };
+
+    // A goal that fails the check: not accepted (rather than accepted and then aborted).
+    let (_, response) = send(goal(0.0, 3)).await;
+    assert!(!response.accepted, "a goal with chord 0 must be rejected");
+
+    // A good goal: feedback in order, then the result.
+    let (goal_id, response) = send(goal(100.0, 5)).await;
+    assert!(response.accepted);
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    let first = tokio::time::timeout(PATIENCE, feedback.next())
+        .await
+        .expect("feedback in time")
+        .expect("stream")
+        .expect("feedback");
+    assert_eq!(first.total_iterations, 5, "{first:?}");
+    let (status, result) = result_of(&client, goal_id).await;
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert_eq!(
+        result.message, "count-2: 5 of 5",
+        "the id counts every goal read"
+    );
+
+    // A result asked for only after its goal ended still arrives.
+    let (goal_id, response) = send(goal(100.0, 1)).await;
+    assert!(response.accepted);
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let (status, result) = result_of(&client, goal_id).await;
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert_eq!(result.message, "count-3: 1 of 1");
+
+    // A cancel during the run: the goal stops early and ends as canceled.
+    let (goal_id, response) = send(goal(100.0, 100_000)).await;
+    assert!(response.accepted);
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    tokio::time::timeout(PATIENCE, feedback.next())
+        .await
+        .expect("feedback in time");
+    client.cancel_goal(goal_id).expect("cancel sent");
+    let (status, result) = result_of(&client, goal_id).await;
+    assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
+    assert!(!result.success, "{}", result.message);
+
+    // The node shutting down ends the server.
+    shutdown.trigger();
+    tokio::time::timeout(PATIENCE, serving)
+        .await
+        .expect("the server returns on shutdown")
+        .expect("task")
+        .expect("served without error");
+}
+
+/// Waits the goal's `iterations` milliseconds, awaiting rather than blocking (as a machine run
+/// does), or until it is canceled.
+struct Sleeper;
+
+impl GoalHandler for Sleeper {
+    type Goal = PlanHotwireGoal;
+    type Result = PlanHotwireResult;
+    type Feedback = PlanHotwireFeedback;
+    type Job = u64;
+
+    fn job_id(&self, goal: &PlanHotwireGoal, _served: u64) -> String {
+        goal.job_id.clone()
+    }
+
+    fn validate(&self, goal: &PlanHotwireGoal, _job_id: &str) -> Result<u64, String> {
+        Ok(u64::from(goal.iterations))
+    }
+
+    async fn run(
+        &self,
+        ms: u64,
+        ctx: GoalContext<PlanHotwireFeedback>,
+    ) -> anyhow::Result<GoalEnd<PlanHotwireResult>> {
+        ctx.feedback(PlanHotwireFeedback::default());
+        let result = |message: &str| PlanHotwireResult {
+            message: format!("{}: {message}", ctx.job_id()),
+            ..Default::default()
+        };
+        Ok(tokio::select! {
+            _ = tokio::time::sleep(Duration::from_millis(ms)) => GoalEnd::succeeded(result("slept")),
+            _ = ctx.canceled() => GoalEnd::canceled(result("woken")),
+        })
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_goals_run_side_by_side_and_cancel_alone() {
+    let domain = domain(1);
+    let (server_node, _) = node("sleeper", domain);
+    let (client_node, _) = node("operator", domain);
+    let serving = tokio::spawn(goal_server::serve(
+        server_node,
+        "/sleep",
+        Sleeper,
+        ServeOptions::concurrent(60.0),
+    ));
+    let client: Client = client_node.action_client("/sleep").unwrap();
+    assert!(client_node.wait_for_action_server("/sleep", PATIENCE).await);
+    let client = &client;
+    let send = |job: &str, ms: u32| {
+        let g = PlanHotwireGoal {
+            job_id: job.into(),
+            iterations: ms,
+            ..Default::default()
+        };
+        async move {
+            let (id, response) = tokio::time::timeout(PATIENCE, client.async_send_goal(g))
+                .await
+                .expect("goal answered in time")
+                .expect("goal sent");
+            assert!(response.accepted);
+            id
+        }
+    };
+    let long = send("long", 600_000).await;
+    // Accepted and run while the long one still runs.
+    let short = send("short", 100).await;
+    let (status, result) = result_of(client, short).await;
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert_eq!(result.message, "short: slept");
+    client.cancel_goal(long).expect("cancel sent");
+    let (status, result) = result_of(client, long).await;
+    assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
+    assert_eq!(result.message, "long: woken");
+    assert!(!serving.is_finished());
+    serving.abort();
+}

@@ -1,0 +1,287 @@
+//! Sequencing bench (seed 003 §A5 metrics, issue 7 targets): per instance and policy, idle
+//! length, cut length, overheats, maximum temperature, runtime and, thermal cost off, the gap
+//! of our idle length to LKH-3 (PyPI `elkai` via `benches/lkh_peer.py`, when installed) on the
+//! same pierce points.
+//!
+//! Instances: the seeded generator ([`cell_sequencer::generator`], seed 7) at each size, strict
+//! precedence, free pierce candidates; then the real part outlines of
+//! `tests/data/sheet/plate_holes_nest.json`.
+//!
+//! `cargo bench -p cell_sequencer --bench sequencing [-- SIZES...]` (sizes in contours, default
+//! 50 500 1000 5000; `plate` alone runs only the plate nest). `BENCH_POLICIES=0` skips the
+//! paper's policies other than nearest (quicker tuning runs); `K_LOSS`, `T_MAX_C`, `CELL_MM`
+//! and `K_C` override the thermal defaults (`LKH_MAX`: the most points handed to LKH-3,
+//! default 2000), `PROXY_WEIGHT`, `PROXY_RADIUS` and `IDLE_BUDGET`
+//! the improvement's (also `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS`,
+//! `MAX_ITER`).
+//!
+//! Rows: `nearest` … `cost_greedy` are the constructions alone; `nearest+imp` and `path+imp`
+//! are that construction then the improvement with its default parameters (idle budget 1.5×
+//! nearest), runtime including the construction, the improvement and the final true
+//! simulation (`nearest+imp`: the start's raster run goes alongside the search,
+//! [`cell_sequencer::improve::Start::Cuts`]). Thermal off: `nearest` and `nearest+imp`, with the gap to LKH-3 on the pierce
+//! points chosen (LKH-3 ignores precedence, so part of the gap is the rules' price); last,
+//! `scatter` rows: the
+//! pure TSP (scattered points, one pierce point each, no precedence) against LKH-3.
+
+use std::path::Path;
+use std::time::Instant;
+
+use cell_sequencer::cost::{CostParams, Evaluator};
+use cell_sequencer::fixtures::scattered;
+use cell_sequencer::generator::{generate, GeneratorConfig};
+use cell_sequencer::improve::{improve, ImproveOptions, ImproveParams, Improved, Start};
+use cell_sequencer::layout::{Layout, PierceOptions};
+use cell_sequencer::plan::CutPlan;
+use cell_sequencer::policy::{construct, construct_cuts, Policy};
+use cell_sequencer::precedence::PrecedenceMode;
+use cell_sequencer::problem::Problem;
+use cell_sequencer::thermal::ThermalParams;
+
+fn env(k: &str) -> Option<f64> {
+    std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok())
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut sizes: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
+    let plate_only = args.iter().any(|a| a == "plate");
+    if sizes.is_empty() && !plate_only {
+        sizes = vec![50, 500, 1000, 5000];
+    }
+    println!(
+        "{:>7} {:>6} {:>7} {:>12} {:>9} {:>9} {:>8} {:>7} {:>9} {:>8} {:>7}",
+        "inst",
+        "n",
+        "thermal",
+        "policy",
+        "idle_mm",
+        "cut_mm",
+        "overheat",
+        "max_c",
+        "cost",
+        "ms",
+        "lkh_%"
+    );
+    let mut instances: Vec<(String, Problem)> = sizes
+        .iter()
+        .map(|&n| {
+            let layout = generate(&GeneratorConfig {
+                seed: 7,
+                contours: n,
+                ..Default::default()
+            });
+            (format!("gen{n}"), problem_of(&layout))
+        })
+        .collect();
+    if plate_only || args.is_empty() || args.iter().any(|a| a == "+plate") {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tests/data/sheet/plate_holes_nest.json");
+        let layout = Layout::from_json_file(&path).expect("plate nest");
+        instances.push(("plate".into(), problem_of(&layout)));
+    }
+    for (name, problem) in &instances {
+        run_instance(name, problem);
+    }
+    // The pure TSP side: scattered points, one pierce point each, no precedence.
+    println!();
+    for n in sizes.iter().copied().filter(|&n| n <= 1000) {
+        let problem = scattered(n, 42);
+        let cost = CostParams {
+            thermal: false,
+            ..Default::default()
+        };
+        let eval = Evaluator::new(&problem, thermal_params(), cost).unwrap();
+        let t0 = Instant::now();
+        let nearest = construct(&eval, Policy::Nearest, 0).unwrap();
+        let better = improve(&eval, Start::Plan(&nearest), improve_options())
+            .unwrap()
+            .best;
+        let ms = t0.elapsed().as_secs_f64() * 1e3;
+        let gap = lkh_length(&problem, &better).map(|l| 100.0 * (better.idle_mm / l - 1.0));
+        row("scatter", n, false, "nearest+imp", &better, ms, gap);
+    }
+}
+
+fn problem_of(layout: &Layout) -> Problem {
+    layout
+        .to_problem(PrecedenceMode::Strict, &PierceOptions::default())
+        .expect("valid layout")
+}
+
+/// The improvement with [`improve_params`] and no hooks.
+fn improve_options() -> ImproveOptions<'static> {
+    ImproveOptions {
+        params: improve_params(),
+        ..Default::default()
+    }
+}
+
+fn improve_params() -> ImproveParams {
+    let d = ImproveParams::default();
+    ImproveParams {
+        proxy_weight: env("PROXY_WEIGHT").unwrap_or(d.proxy_weight),
+        proxy_radius_mm: env("PROXY_RADIUS").unwrap_or(d.proxy_radius_mm),
+        idle_budget: env("IDLE_BUDGET").unwrap_or(d.idle_budget),
+        proxy_half_life_mm: env("PROXY_HALF_LIFE").unwrap_or(d.proxy_half_life_mm),
+        proxy_lookback: env("PROXY_LOOKBACK").map_or(d.proxy_lookback, |v| v as usize),
+        time_budget_ms: env("TIME_BUDGET_MS").map_or(d.time_budget_ms, |v| v as u64),
+        max_iterations: env("MAX_ITER").map_or(d.max_iterations, |v| v as usize),
+        ..d
+    }
+}
+
+fn run_instance(name: &str, problem: &Problem) {
+    let n = problem.contours.len();
+    let all = env("BENCH_POLICIES").is_none_or(|v| v != 0.0);
+    for thermal in [true, false] {
+        let cost = CostParams {
+            thermal,
+            ..Default::default()
+        };
+        let eval = Evaluator::new(problem, thermal_params(), cost).unwrap();
+        let t0 = Instant::now();
+        let nearest = construct(&eval, Policy::Nearest, 1).unwrap();
+        let nn_ms = t0.elapsed().as_secs_f64() * 1e3;
+        row(name, n, thermal, "nearest", &nearest, nn_ms, None);
+        if thermal && all {
+            for policy in [
+                Policy::MinOverheat,
+                Policy::Random,
+                Policy::PathOverheat,
+                Policy::CostGreedy,
+            ] {
+                let t0 = Instant::now();
+                let plan = construct(&eval, policy, 1).unwrap();
+                let ms = t0.elapsed().as_secs_f64() * 1e3;
+                row(name, n, thermal, &policy_name(policy), &plan, ms, None);
+            }
+        }
+        // Improvement from nearest pierce and (thermal cost on) from the paper's method, the
+        // node's default construction.
+        let starts: &[Policy] = if thermal {
+            &[Policy::Nearest, Policy::PathOverheat]
+        } else {
+            &[Policy::Nearest]
+        };
+        for &policy in starts {
+            let t0 = Instant::now();
+            let better = if policy == Policy::Nearest {
+                // The order alone; its raster run goes alongside the search.
+                let cuts = construct_cuts(&eval, policy, 1).unwrap();
+                let Improved {
+                    start,
+                    best: better,
+                } = improve(&eval, Start::Cuts(&cuts), improve_options()).unwrap();
+                assert_eq!(start, nearest);
+                better
+            } else {
+                let start = construct(&eval, policy, 1).unwrap();
+                improve(&eval, Start::Plan(&start), improve_options())
+                    .unwrap()
+                    .best
+            };
+            let ms = t0.elapsed().as_secs_f64() * 1e3;
+            let gap = if thermal {
+                None
+            } else {
+                lkh_length(problem, &better).map(|l| 100.0 * (better.idle_mm / l - 1.0))
+            };
+            let label = if policy == Policy::Nearest {
+                "nearest+imp"
+            } else {
+                "path+imp"
+            };
+            row(name, n, thermal, label, &better, ms, gap);
+            if thermal {
+                println!(
+                    "{:>7}   {label} vs nearest: overheats {:+.1} %, idle ×{:.2}",
+                    "",
+                    100.0 * (better.overheats as f64 / nearest.overheats.max(1) as f64 - 1.0),
+                    better.idle_mm / nearest.idle_mm
+                );
+            }
+        }
+    }
+}
+
+fn policy_name(p: Policy) -> String {
+    match p {
+        Policy::Nearest => "nearest",
+        Policy::MinOverheat => "min_overheat",
+        Policy::Random => "random",
+        Policy::PathOverheat => "path_overheat",
+        Policy::CostGreedy => "cost_greedy",
+    }
+    .into()
+}
+
+/// Defaults, with `K_LOSS`, `T_MAX_C`, `CELL_MM`, `K_C` from the environment for tuning runs.
+fn thermal_params() -> ThermalParams {
+    let mut p = ThermalParams::default();
+    if let Some(v) = env("K_LOSS") {
+        p.k_loss = v as f32;
+    }
+    if let Some(v) = env("T_MAX_C") {
+        p.t_max_c = v as f32;
+    }
+    if let Some(v) = env("CELL_MM") {
+        p.cell_mm = v;
+    }
+    if let Some(v) = env("K_C") {
+        p.k_conductivity = v as f32;
+    }
+    p
+}
+
+/// LKH-3's closed-tour length over the start and the pierce points `plan` chose (no
+/// precedence: a lower bound on what any precedence-respecting order of them can reach), if
+/// `python3` with `elkai` is available (`pip install -r crates/sequencer/benches/requirements.txt`;
+/// `LKH_PYTHON` names another interpreter, e.g. a venv's).
+fn lkh_length(problem: &Problem, plan: &CutPlan) -> Option<f64> {
+    use std::io::Write;
+    // LKH-3's ten runs take minutes from a few thousand points on: skipped above LKH_MAX
+    // points (default 2000).
+    if plan.cuts.len() as f64 > env("LKH_MAX").unwrap_or(2000.0) {
+        return None;
+    }
+    use std::process::{Command, Stdio};
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/lkh_peer.py");
+    let python = std::env::var("LKH_PYTHON").unwrap_or_else(|_| "python3".into());
+    let mut child = Command::new(python)
+        .arg(script)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .ok()?;
+    {
+        let mut stdin = child.stdin.take()?;
+        let mut text = format!("{} {}\n", problem.start[0], problem.start[1]);
+        for c in &plan.cuts {
+            let p = c.point(problem);
+            text.push_str(&format!("{} {}\n", p[0], p[1]));
+        }
+        stdin.write_all(text.as_bytes()).ok()?;
+    }
+    let out = child.wait_with_output().ok()?;
+    String::from_utf8(out.stdout).ok()?.trim().parse().ok()
+}
+
+fn row(inst: &str, n: usize, thermal: bool, name: &str, p: &CutPlan, ms: f64, gap: Option<f64>) {
+    let gap = gap.map_or_else(|| "".to_string(), |g| format!("{g:+.2}"));
+    println!(
+        "{:>7} {:>6} {:>7} {:>12} {:>9.0} {:>9.0} {:>8} {:>7.0} {:>9.0} {:>8.1} {:>7}",
+        inst,
+        n,
+        if thermal { "on" } else { "off" },
+        name,
+        p.idle_mm,
+        p.cut_mm,
+        p.overheats,
+        p.max_temp_c,
+        p.cost,
+        ms,
+        gap
+    );
+}

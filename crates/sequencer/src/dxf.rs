@@ -1,0 +1,1201 @@
+//! DXF input for nested layouts (issue 7; seed 003 §A1 contours `C_ij`), read with the `dxf`
+//! crate.
+//!
+//! **Entities.** LWPOLYLINE and POLYLINE (bulges become arcs), LINE, ARC, CIRCLE, ELLIPSE
+//! and SPLINE (flattened to [`DxfOptions::chord_tol_mm`]), and INSERT (the block's entities,
+//! scaled, rotated, arrayed and mirrored as the insert says; nested blocks too). Annotation
+//! (text, dimensions, leaders, points, images, hatches, construction lines) is ignored; any
+//! other geometry (3DFACE, SOLID, REGION, MLINE, polyface meshes, …) is
+//! [`DxfError::Unsupported`] naming the entity, so no outline is silently lost. Closed
+//! polylines, circles and full ellipses are contours on their own. Open polylines, LINEs and ARCs are **chained**: an endpoint joins another
+//! entity's endpoint within [`DxfOptions::join_tol_mm`] (either direction; pieces are reversed
+//! as needed) until the chain returns to its start. A chain that cannot close is
+//! [`DxfError::OpenChain`], naming its entities (type, handle, layer) and the dangling end.
+//!
+//! **Arcs** are flattened to polylines whose chords deviate from the arc by at most
+//! [`DxfOptions::chord_tol_mm`] (`cavalier_contours::arcs_to_approx_lines`). Entities with an
+//! extrusion direction of −Z (mirrored OCS) are mirrored back (x → −x, bulge → −bulge).
+//!
+//! **Roles.** Whether a contour is an outer contour or a hole, and of which part, comes from
+//! the containment tree ([`Layout::from_rings`]), not from layers or colours.
+//!
+//! **Sheet.** [`DxfOptions::sheet`] if given; else the closed contour on layer
+//! [`DxfOptions::sheet_layer`] (its bounding box; the drawing is shifted so that its lower-left
+//! corner is the origin); else the bounding box of all contours, shifted to the origin.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use cavalier_contours::polyline::{PlineCreation, PlineSource, PlineSourceMut, Polyline};
+use dxf::entities::{Entity, EntityType};
+use dxf::Drawing;
+
+use crate::containment::bbox;
+use crate::layout::{Layout, LayoutError};
+use crate::problem::{distance, Point};
+
+/// DXF reading options (issue 7).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DxfOptions {
+    /// Maximum distance between an arc and its flattening chords, mm.
+    pub chord_tol_mm: f64,
+    /// Endpoints closer than this are joined when chaining, mm.
+    pub join_tol_mm: f64,
+    /// Sheet size `a × b`, mm (overrides the sheet layer).
+    pub sheet: Option<[f64; 2]>,
+    /// Layer whose closed contour is the sheet outline (case-insensitive).
+    pub sheet_layer: String,
+    /// `P_start`, mm, in sheet coordinates.
+    pub start: Point,
+}
+
+impl Default for DxfOptions {
+    fn default() -> Self {
+        DxfOptions {
+            chord_tol_mm: 0.05,
+            join_tol_mm: 0.01,
+            sheet: None,
+            sheet_layer: "SHEET".into(),
+            start: [0.0, 0.0],
+        }
+    }
+}
+
+/// One source entity of a contour (issue 7: errors name the entity), for error messages.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EntityRef {
+    /// `LINE`, `ARC`, `CIRCLE`, `LWPOLYLINE`, `POLYLINE`, or `SEGMENT` for other sources.
+    pub kind: String,
+    /// The DXF handle (hex), empty if the file has none.
+    pub handle: String,
+    /// The layer.
+    pub layer: String,
+}
+
+impl std::fmt::Display for EntityRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} #{} on layer '{}'",
+            self.kind, self.handle, self.layer
+        )
+    }
+}
+
+fn describe(entities: &[EntityRef]) -> String {
+    const SHOWN: usize = 4;
+    let mut s: Vec<String> = entities.iter().take(SHOWN).map(|e| e.to_string()).collect();
+    if entities.len() > SHOWN {
+        s.push(format!("and {} more", entities.len() - SHOWN));
+    }
+    s.join(", ")
+}
+
+/// Errors reading a DXF layout (issue 7).
+#[derive(Debug, thiserror::Error)]
+pub enum DxfError {
+    /// The file cannot be read or parsed by the `dxf` crate.
+    #[error("{path}: {message}")]
+    Read {
+        /// The file.
+        path: String,
+        /// The parser's message.
+        message: String,
+    },
+    /// Chained entities do not close.
+    #[error("{path}: open contour: {} (end at ({:.3}, {:.3}) mm joins nothing within {tol_mm} mm)", describe(.entities), .end[0], .end[1])]
+    OpenChain {
+        /// The file.
+        path: String,
+        /// The entities of the open chain, in chain order.
+        entities: Vec<EntityRef>,
+        /// The dangling end, mm.
+        end: Point,
+        /// The join tolerance used, mm.
+        tol_mm: f64,
+    },
+    /// A contour is invalid (self-intersecting, degenerate, off the sheet) or the nesting is
+    /// inconsistent; the message names the entities.
+    #[error("{path}: {source}")]
+    Layout {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: LayoutError,
+    },
+    /// A non-finite coordinate or parameter.
+    #[error("{path}: {entity}: non-finite coordinate")]
+    NonFinite {
+        /// The file.
+        path: String,
+        /// The entity.
+        entity: EntityRef,
+    },
+    /// Geometry the reader cannot turn into contours, or an entity it cannot use.
+    #[error("{path}: {entity}: {reason}")]
+    Unsupported {
+        /// The file.
+        path: String,
+        /// The entity.
+        entity: EntityRef,
+        /// Why, and what to do about it.
+        reason: String,
+    },
+}
+
+/// Blocks inside blocks deeper than this are taken for a cycle.
+const MAX_BLOCK_DEPTH: usize = 16;
+
+/// A 2-D affine map `p ↦ A·p + t` (row-major `[a, b, tx, c, d, ty]`), the placement of an
+/// INSERT's block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Placement([f64; 6]);
+
+impl Placement {
+    const IDENTITY: Placement = Placement([1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+
+    fn apply(&self, p: Point) -> Point {
+        let m = &self.0;
+        [
+            m[0] * p[0] + m[1] * p[1] + m[2],
+            m[3] * p[0] + m[4] * p[1] + m[5],
+        ]
+    }
+
+    /// `self ∘ inner`: first `inner`, then `self`.
+    fn then(&self, inner: &Placement) -> Placement {
+        let (a, b) = (&self.0, &inner.0);
+        Placement([
+            a[0] * b[0] + a[1] * b[3],
+            a[0] * b[1] + a[1] * b[4],
+            a[0] * b[2] + a[1] * b[5] + a[2],
+            a[3] * b[0] + a[4] * b[3],
+            a[3] * b[1] + a[4] * b[4],
+            a[3] * b[2] + a[4] * b[5] + a[5],
+        ])
+    }
+
+    fn det(&self) -> f64 {
+        self.0[0] * self.0[4] - self.0[1] * self.0[3]
+    }
+
+    /// Whether circles stay circles (rotation, uniform scale, mirror), so bulges survive.
+    fn is_similarity(&self) -> bool {
+        let m = &self.0;
+        let (c0, c1) = (m[0] * m[0] + m[3] * m[3], m[1] * m[1] + m[4] * m[4]);
+        let dot = m[0] * m[1] + m[3] * m[4];
+        (c0 - c1).abs() <= 1e-12 * c0.max(c1) && dot.abs() <= 1e-12 * c0.max(c1)
+    }
+
+    /// The largest stretch factor, for scaling the chord tolerance.
+    fn max_scale(&self) -> f64 {
+        let m = &self.0;
+        (m[0] * m[0] + m[3] * m[3])
+            .sqrt()
+            .max((m[1] * m[1] + m[4] * m[4]).sqrt())
+    }
+
+    /// Places a piece: vertices mapped; bulges kept (negated by a mirror) under a similarity,
+    /// arcs flattened first under any other map (an arc sheared or stretched is no arc).
+    fn place(&self, piece: Piece, chord_tol_mm: f64) -> Piece {
+        if *self == Placement::IDENTITY {
+            return piece;
+        }
+        let piece = if self.is_similarity() || piece.vertices.iter().all(|v| v[2] == 0.0) {
+            piece
+        } else {
+            let tol = chord_tol_mm / self.max_scale().max(1e-12);
+            let pts = flatten_path(&piece.vertices, piece.closed, tol);
+            Piece {
+                vertices: pts.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+                ..piece
+            }
+        };
+        let flip = if self.det() < 0.0 { -1.0 } else { 1.0 };
+        Piece {
+            vertices: piece
+                .vertices
+                .iter()
+                .map(|v| {
+                    let q = self.apply([v[0], v[1]]);
+                    [q[0], q[1], flip * v[2]]
+                })
+                .collect(),
+            ..piece
+        }
+    }
+}
+
+/// A run of polyline vertices `(x, y, bulge)` from its sources (a piece of a contour `C_ij`,
+/// seed 003 §A1; issue 7 chaining); in an open piece the last
+/// bulge is unused, in a closed one it is the closing segment's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Piece {
+    /// Vertices `[x, y, bulge]`, mm.
+    pub vertices: Vec<[f64; 3]>,
+    /// Whether the piece is already a closed contour.
+    pub closed: bool,
+    /// Where it came from.
+    pub sources: Vec<EntityRef>,
+}
+
+impl Piece {
+    fn first(&self) -> Point {
+        [self.vertices[0][0], self.vertices[0][1]]
+    }
+    fn last(&self) -> Point {
+        let v = self.vertices[self.vertices.len() - 1];
+        [v[0], v[1]]
+    }
+    /// The same path walked backwards (bulges negated and moved to the new segment starts).
+    fn reversed(&self) -> Piece {
+        let m = self.vertices.len();
+        let vertices = (0..m)
+            .map(|i| {
+                let v = self.vertices[m - 1 - i];
+                let bulge = if i + 1 < m {
+                    -self.vertices[m - 2 - i][2]
+                } else {
+                    0.0
+                };
+                [v[0], v[1], bulge]
+            })
+            .collect();
+        let mut sources = self.sources.clone();
+        sources.reverse();
+        Piece {
+            vertices,
+            closed: self.closed,
+            sources,
+        }
+    }
+}
+
+/// Chains open pieces into closed ones by joining endpoints within `tol_mm` (issue 7). Closed
+/// input pieces pass through; straight two-point pieces no longer than `tol_mm` are dropped.
+///
+/// # Errors
+/// The first chain that cannot close, with the end that found no partner.
+pub fn chain_pieces(pieces: Vec<Piece>, tol_mm: f64) -> Result<Vec<Piece>, (Piece, Point)> {
+    let tol = tol_mm.max(1e-12);
+    let (mut closed, mut open): (Vec<Piece>, Vec<Piece>) =
+        pieces.into_iter().partition(|p| p.closed);
+    // A straight piece no longer than the tolerance joins both its neighbours' ends at once
+    // and would strand itself; it carries no geometry at this tolerance, so it is dropped.
+    open.retain(|p| {
+        p.vertices.len() > 2 || p.vertices[0][2] != 0.0 || distance(p.first(), p.last()) > tol
+    });
+    let key = |p: Point| ((p[0] / tol).floor() as i64, (p[1] / tol).floor() as i64);
+    let mut index: HashMap<(i64, i64), Vec<(usize, bool)>> = HashMap::new();
+    for (i, p) in open.iter().enumerate() {
+        index.entry(key(p.first())).or_default().push((i, false));
+        index.entry(key(p.last())).or_default().push((i, true));
+    }
+    let mut used = vec![false; open.len()];
+    let find = |at: Point, used: &[bool]| -> Option<(usize, bool)> {
+        let (kx, ky) = key(at);
+        let mut best: Option<(f64, usize, bool)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for &(j, is_end) in index.get(&(kx + dx, ky + dy)).into_iter().flatten() {
+                    if used[j] {
+                        continue;
+                    }
+                    let q = if is_end {
+                        open[j].last()
+                    } else {
+                        open[j].first()
+                    };
+                    let d = distance(at, q);
+                    if d <= tol && best.is_none_or(|(bd, bj, _)| (d, j) < (bd, bj)) {
+                        best = Some((d, j, is_end));
+                    }
+                }
+            }
+        }
+        best.map(|(_, j, e)| (j, e))
+    };
+    for i in 0..open.len() {
+        if used[i] {
+            continue;
+        }
+        used[i] = true;
+        let mut chain = open[i].clone();
+        loop {
+            let end = chain.last();
+            if chain.vertices.len() >= 3 && distance(end, chain.first()) <= tol {
+                chain.vertices.pop();
+                chain.closed = true;
+                closed.push(chain);
+                break;
+            }
+            let Some((j, at_end)) = find(end, &used) else {
+                return Err((chain, end));
+            };
+            used[j] = true;
+            let next = if at_end {
+                open[j].reversed()
+            } else {
+                open[j].clone()
+            };
+            let last = chain.vertices.len() - 1;
+            chain.vertices[last][2] = next.vertices[0][2];
+            chain.vertices.extend_from_slice(&next.vertices[1..]);
+            chain.sources.extend(next.sources);
+        }
+    }
+    Ok(closed)
+}
+
+/// Flattens a closed piece's arcs to chords within `chord_tol_mm` (cavalier_contours), giving
+/// the polyline contour `C_ij` of seed 003 §A1 (issue 7: arcs flattened to a chord tolerance).
+pub fn flatten(piece: &Piece, chord_tol_mm: f64) -> Vec<Point> {
+    flatten_path(&piece.vertices, true, chord_tol_mm)
+}
+
+/// Flattens `[x, y, bulge]` vertices, open or closed, to chords within `chord_tol_mm`.
+fn flatten_path(vertices: &[[f64; 3]], closed: bool, chord_tol_mm: f64) -> Vec<Point> {
+    let mut p: Polyline<f64> = Polyline::with_capacity(vertices.len(), closed);
+    for v in vertices {
+        p.add(v[0], v[1], v[2]);
+    }
+    let lines = if p.iter_vertexes().any(|v| v.bulge != 0.0) {
+        p.arcs_to_approx_lines(chord_tol_mm.max(1e-6)).unwrap_or(p)
+    } else {
+        p
+    };
+    lines.iter_vertexes().map(|v| [v.x, v.y]).collect()
+}
+
+/// Reads a DXF file into a [`Layout`] (module docs; issue 7, seed 003 §A1).
+///
+/// # Errors
+/// [`DxfError`], naming the file and, where it applies, the entities.
+pub fn read_dxf(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfError> {
+    let path = path.as_ref();
+    let name = path.display().to_string();
+    let drawing = Drawing::load_file(path).map_err(|e| DxfError::Read {
+        path: name.clone(),
+        message: e.to_string(),
+    })?;
+    layout_from_drawing(&drawing, &name, opt)
+}
+
+/// Reads a layout from a `.dxf` file ([`read_dxf`]) or, for any other extension, from the
+/// JSON format ([`Layout::from_json_file`]) (issue 7: `--layout FILE.dxf|json`).
+///
+/// # Errors
+/// [`DxfError`]; JSON errors come as [`DxfError::Layout`].
+pub fn read_layout(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfError> {
+    let path = path.as_ref();
+    let is_dxf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("dxf"));
+    if is_dxf {
+        read_dxf(path, opt)
+    } else {
+        Layout::from_json_file(path).map_err(|source| DxfError::Layout {
+            path: path.display().to_string(),
+            source,
+        })
+    }
+}
+
+/// Converts a loaded drawing into a [`Layout`] (issue 7, seed 003 §A1); `name` names the
+/// source in errors.
+///
+/// # Errors
+/// As [`read_dxf`].
+pub fn layout_from_drawing(
+    drawing: &Drawing,
+    name: &str,
+    opt: &DxfOptions,
+) -> Result<Layout, DxfError> {
+    let mut pieces = Vec::new();
+    let mut reader = Reader {
+        drawing,
+        name,
+        opt,
+        pieces: &mut pieces,
+    };
+    reader.collect(drawing.entities(), &Placement::IDENTITY, None, 0)?;
+    let closed =
+        chain_pieces(pieces, opt.join_tol_mm).map_err(|(chain, end)| DxfError::OpenChain {
+            path: name.into(),
+            entities: chain.sources,
+            end,
+            tol_mm: opt.join_tol_mm,
+        })?;
+    let mut rings = Vec::new();
+    let mut names = Vec::new();
+    let mut sheet_box = None;
+    for piece in &closed {
+        let ring = flatten(piece, opt.chord_tol_mm);
+        let on_sheet_layer = piece
+            .sources
+            .iter()
+            .all(|s| s.layer.eq_ignore_ascii_case(&opt.sheet_layer));
+        if on_sheet_layer && sheet_box.is_none() {
+            sheet_box = Some(bbox(&ring));
+            continue;
+        }
+        names.push(describe(&piece.sources));
+        rings.push(ring);
+    }
+    let (shift, sheet) = match (opt.sheet, sheet_box) {
+        (Some(s), _) => ([0.0, 0.0], s),
+        (None, Some(b)) => ([b[0], b[1]], [b[2] - b[0], b[3] - b[1]]),
+        (None, None) => {
+            let all: Vec<Point> = rings.iter().flatten().copied().collect();
+            let b = bbox(&all);
+            if all.is_empty() {
+                ([0.0, 0.0], [1.0, 1.0])
+            } else {
+                ([b[0], b[1]], [b[2] - b[0], b[3] - b[1]])
+            }
+        }
+    };
+    for ring in &mut rings {
+        for p in ring.iter_mut() {
+            p[0] -= shift[0];
+            p[1] -= shift[1];
+        }
+    }
+    Layout::from_rings(sheet, opt.start, rings, &names).map_err(|source| DxfError::Layout {
+        path: name.into(),
+        source,
+    })
+}
+
+/// Walks entities (and the blocks INSERTs place) into [`Piece`]s.
+struct Reader<'a> {
+    drawing: &'a Drawing,
+    name: &'a str,
+    opt: &'a DxfOptions,
+    pieces: &'a mut Vec<Piece>,
+}
+
+/// The INSERT a block's entities are placed by: its block name, handle and layer.
+#[derive(Clone)]
+struct Via {
+    block: String,
+    handle: String,
+    layer: String,
+}
+
+impl Reader<'_> {
+    fn collect<'e>(
+        &mut self,
+        entities: impl Iterator<Item = &'e Entity>,
+        at: &Placement,
+        via: Option<&Via>,
+        depth: usize,
+    ) -> Result<(), DxfError> {
+        for e in entities {
+            let mut source = EntityRef {
+                kind: entity_kind(e).into(),
+                handle: e.common.handle.as_string(),
+                layer: e.common.layer.clone(),
+            };
+            if let Some(v) = via {
+                source.kind = format!(
+                    "{} (block '{}' placed by INSERT #{})",
+                    source.kind, v.block, v.handle
+                );
+                // Block entities on layer 0 take the layer of their INSERT (DXF rule).
+                if source.layer == "0" {
+                    source.layer = v.layer.clone();
+                }
+            }
+            let unsupported = |reason: String| DxfError::Unsupported {
+                path: self.name.into(),
+                entity: source.clone(),
+                reason,
+            };
+            if let EntityType::Insert(ins) = &e.specific {
+                if depth >= MAX_BLOCK_DEPTH {
+                    return Err(unsupported(format!(
+                        "blocks nested more than {MAX_BLOCK_DEPTH} deep (a block that contains itself?)"
+                    )));
+                }
+                let block = self
+                    .drawing
+                    .blocks()
+                    .find(|b| b.name.eq_ignore_ascii_case(&ins.name))
+                    .ok_or_else(|| unsupported(format!("block '{}' is not defined", ins.name)))?;
+                let placements = insert_placements(ins, [block.base_point.x, block.base_point.y])
+                    .map_err(unsupported)?;
+                let inner = Via {
+                    block: block.name.clone(),
+                    handle: source.handle.clone(),
+                    layer: source.layer.clone(),
+                };
+                for p in placements {
+                    self.collect(block.entities.iter(), &at.then(&p), Some(&inner), depth + 1)?;
+                }
+                continue;
+            }
+            let Some(piece) =
+                entity_piece(e, source.clone(), self.opt.chord_tol_mm).map_err(unsupported)?
+            else {
+                continue;
+            };
+            if piece.vertices.iter().flatten().any(|v| !v.is_finite()) {
+                return Err(DxfError::NonFinite {
+                    path: self.name.into(),
+                    entity: source,
+                });
+            }
+            self.pieces.push(at.place(piece, self.opt.chord_tol_mm));
+        }
+        Ok(())
+    }
+}
+
+/// The placements of an INSERT's block, one per array cell: `p ↦ location + R·(S·(p − base)
+/// + (col·column_spacing, row·row_spacing))`, then mirrored in x when the extrusion is −Z.
+fn insert_placements(ins: &dxf::entities::Insert, base: Point) -> Result<Vec<Placement>, String> {
+    let values = [
+        ins.location.x,
+        ins.location.y,
+        ins.x_scale_factor,
+        ins.y_scale_factor,
+        ins.rotation,
+        ins.column_spacing,
+        ins.row_spacing,
+    ];
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err("non-finite placement".into());
+    }
+    if ins.x_scale_factor == 0.0 || ins.y_scale_factor == 0.0 {
+        return Err("zero scale factor".into());
+    }
+    let (cols, rows) = (ins.column_count.max(1), ins.row_count.max(1));
+    if i32::from(cols) * i32::from(rows) > 10_000 {
+        return Err(format!("array of {cols} × {rows} copies is too large"));
+    }
+    let (sin, cos) = ins.rotation.to_radians().sin_cos();
+    let (sx, sy) = (ins.x_scale_factor, ins.y_scale_factor);
+    let mirror = if ins.extrusion_direction.z < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let mut out = Vec::new();
+    for r in 0..rows {
+        for c in 0..cols {
+            let (ox, oy) = (
+                f64::from(c) * ins.column_spacing,
+                f64::from(r) * ins.row_spacing,
+            );
+            // Local: q = S·(p − base) + o; world: location + R·q.
+            let local = Placement([sx, 0.0, ox - sx * base[0], 0.0, sy, oy - sy * base[1]]);
+            let world = Placement([cos, -sin, ins.location.x, sin, cos, ins.location.y]);
+            let flip = Placement([mirror, 0.0, 0.0, 0.0, 1.0, 0.0]);
+            out.push(flip.then(&world.then(&local)));
+        }
+    }
+    Ok(out)
+}
+
+/// The DXF name of an entity, for messages.
+fn entity_kind(e: &Entity) -> &'static str {
+    match &e.specific {
+        EntityType::Line(_) => "LINE",
+        EntityType::Arc(_) => "ARC",
+        EntityType::Circle(_) => "CIRCLE",
+        EntityType::Ellipse(_) => "ELLIPSE",
+        EntityType::Spline(_) => "SPLINE",
+        EntityType::LwPolyline(_) => "LWPOLYLINE",
+        EntityType::Polyline(_) => "POLYLINE",
+        EntityType::Insert(_) => "INSERT",
+        EntityType::Face3D(_) => "3DFACE",
+        EntityType::Solid3D(_) => "3DSOLID",
+        EntityType::Body(_) => "BODY",
+        EntityType::Region(_) => "REGION",
+        EntityType::Helix(_) => "HELIX",
+        EntityType::MLine(_) => "MLINE",
+        EntityType::Solid(_) => "SOLID",
+        EntityType::Trace(_) => "TRACE",
+        EntityType::Wipeout(_) => "WIPEOUT",
+        EntityType::ProxyEntity(_) => "ACAD_PROXY_ENTITY",
+        EntityType::Text(_) => "TEXT",
+        EntityType::MText(_) => "MTEXT",
+        _ => "annotation",
+    }
+}
+
+/// The polyline piece of one entity: `Ok(None)` for annotation, `Err(reason)` for geometry
+/// this reader cannot use. ELLIPSE and SPLINE come flattened to `chord_tol_mm`.
+fn entity_piece(e: &Entity, source: EntityRef, chord_tol_mm: f64) -> Result<Option<Piece>, String> {
+    let closed_curve = |pts: Vec<Point>| -> Result<Option<Piece>, String> {
+        if pts.iter().flatten().any(|v| !v.is_finite()) {
+            return Err("non-finite coordinate or parameter".into());
+        }
+        let closed = pts.len() > 2 && distance(pts[0], pts[pts.len() - 1]) <= 1e-9;
+        let mut vertices: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        if closed {
+            vertices.pop();
+        }
+        Ok(Some(Piece {
+            vertices,
+            closed,
+            sources: vec![source.clone()],
+        }))
+    };
+    // Mirrored object coordinate system (extrusion −Z): x → −x, arcs turn the other way.
+    let mirror = |z: f64| if z < 0.0 { -1.0 } else { 1.0 };
+    let (vertices, closed) = match &e.specific {
+        EntityType::Line(l) => (vec![[l.p1.x, l.p1.y, 0.0], [l.p2.x, l.p2.y, 0.0]], false),
+        EntityType::Arc(a) => {
+            let m = mirror(a.normal.z);
+            let (a0, a1) = (a.start_angle.to_radians(), a.end_angle.to_radians());
+            let mut sweep = (a1 - a0).rem_euclid(std::f64::consts::TAU);
+            if sweep <= 1e-12 {
+                sweep = std::f64::consts::TAU;
+            }
+            let (c, r) = (a.center.clone(), a.radius);
+            let at = |t: f64| [m * (c.x + r * t.cos()), c.y + r * t.sin()];
+            let (p0, p1) = (at(a0), at(a1));
+            if sweep >= std::f64::consts::TAU - 1e-12 {
+                // A full-circle ARC is a circle.
+                let (q, b) = (at(a0 + std::f64::consts::PI), m);
+                (vec![[p0[0], p0[1], b], [q[0], q[1], b]], true)
+            } else {
+                let bulge = m * (sweep / 4.0).tan();
+                (vec![[p0[0], p0[1], bulge], [p1[0], p1[1], 0.0]], false)
+            }
+        }
+        EntityType::Circle(c) => {
+            let m = mirror(c.normal.z);
+            let (x, y, r) = (m * c.center.x, c.center.y, c.radius);
+            (vec![[x - r, y, 1.0], [x + r, y, 1.0]], true)
+        }
+        EntityType::LwPolyline(p) => {
+            let m = mirror(p.extrusion_direction.z);
+            let v = p
+                .vertices
+                .iter()
+                .map(|v| [m * v.x, v.y, m * v.bulge])
+                .collect();
+            (v, p.is_closed())
+        }
+        // Polyface and polygon meshes (flags 16, 64) are surfaces, not contours.
+        EntityType::Polyline(p) if p.flags & (16 | 64) != 0 => {
+            return Err(
+                "a polyface or polygon mesh is a surface, not an outline; export \
+                        the part's outline as polylines"
+                    .into(),
+            )
+        }
+        EntityType::Polyline(p) => {
+            let m = mirror(p.normal.z);
+            let v = p
+                .vertices()
+                .map(|v| [m * v.location.x, v.location.y, m * v.bulge])
+                .collect();
+            (v, p.is_closed())
+        }
+        EntityType::Ellipse(el) => {
+            return closed_curve(flatten_ellipse(el, chord_tol_mm));
+        }
+        EntityType::Spline(sp) => {
+            return closed_curve(flatten_spline(sp, chord_tol_mm)?);
+        }
+        EntityType::Face3D(_)
+        | EntityType::Solid3D(_)
+        | EntityType::Body(_)
+        | EntityType::Region(_)
+        | EntityType::Helix(_)
+        | EntityType::MLine(_)
+        | EntityType::Solid(_)
+        | EntityType::Trace(_)
+        | EntityType::Wipeout(_)
+        | EntityType::ProxyEntity(_) => {
+            return Err(
+                "this geometry cannot be read as a cutting contour; explode it to \
+                        polylines, lines and arcs in the CAD program"
+                    .into(),
+            )
+        }
+        _ => return Ok(None),
+    };
+    if vertices.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(Piece {
+        vertices,
+        closed,
+        sources: vec![source],
+    }))
+}
+
+/// Points along an ELLIPSE (WCS centre and major axis, minor axis `ratio · (n × major)`),
+/// from its start to its end parameter, with chords deviating at most `chord_tol_mm`
+/// (step `2·acos(1 − tol/a)` on the major radius `a`, which bounds the deviation).
+fn flatten_ellipse(el: &dxf::entities::Ellipse, chord_tol_mm: f64) -> Vec<Point> {
+    let (m, n) = (&el.major_axis, &el.normal);
+    let n_len = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
+    let (nx, ny, nz) = if n_len > 0.0 {
+        (n.x / n_len, n.y / n_len, n.z / n_len)
+    } else {
+        (0.0, 0.0, 1.0)
+    };
+    let k = el.minor_axis_ratio;
+    let minor = [k * (ny * m.z - nz * m.y), k * (nz * m.x - nx * m.z)];
+    let a = (m.x * m.x + m.y * m.y).sqrt();
+    let t0 = el.start_parameter;
+    let mut sweep = (el.end_parameter - t0).rem_euclid(std::f64::consts::TAU);
+    if sweep <= 1e-12 {
+        sweep = std::f64::consts::TAU;
+    }
+    let step = if a > chord_tol_mm {
+        2.0 * (1.0 - chord_tol_mm / a).acos()
+    } else {
+        std::f64::consts::FRAC_PI_2
+    };
+    let count = ((sweep / step.max(1e-6)).ceil() as usize).clamp(8, 100_000);
+    (0..=count)
+        .map(|i| {
+            let t = t0 + sweep * i as f64 / count as f64;
+            let (s, c) = t.sin_cos();
+            [
+                el.center.x + c * m.x + s * minor[0],
+                el.center.y + c * m.y + s * minor[1],
+            ]
+        })
+        .collect()
+}
+
+/// Points along a SPLINE (a NURBS curve of its degree, knots, control points and weights),
+/// each knot span bisected until the chord's midpoint lies within `chord_tol_mm` of the curve.
+///
+/// Hand-written (de Boor's algorithm in homogeneous coordinates, about 30 lines): the NURBS
+/// crates either lack rational curves or bring a geometry kernel this reader does not need.
+fn flatten_spline(sp: &dxf::entities::Spline, chord_tol_mm: f64) -> Result<Vec<Point>, String> {
+    let p = usize::try_from(sp.degree_of_curve).unwrap_or(0);
+    let (knots, cps) = (&sp.knot_values, &sp.control_points);
+    let n = cps.len();
+    if n == 0 {
+        return Err(
+            "a SPLINE given by fit points only is not supported; convert it to a \
+                    control-point spline or a polyline"
+                .into(),
+        );
+    }
+    if p == 0 || n <= p || knots.len() != n + p + 1 {
+        return Err(format!(
+            "invalid SPLINE: degree {}, {n} control points and {} knots (need degree ≥ 1, more \
+             control points than the degree and control points + degree + 1 knots)",
+            sp.degree_of_curve,
+            knots.len()
+        ));
+    }
+    if !sp.weight_values.is_empty() && sp.weight_values.len() != n {
+        return Err(format!(
+            "invalid SPLINE: {} weights for {n} control points",
+            sp.weight_values.len()
+        ));
+    }
+    if knots.iter().any(|k| !k.is_finite()) || knots.windows(2).any(|w| w[1] < w[0]) {
+        return Err("invalid SPLINE: knots must be finite and non-decreasing".into());
+    }
+    let weight = |i: usize| sp.weight_values.get(i).copied().unwrap_or(1.0);
+    if (0..n).any(|i| !weight(i).is_finite() || weight(i) <= 0.0) {
+        return Err("invalid SPLINE: weights must be positive and finite".into());
+    }
+    // Homogeneous control points (w·x, w·y, w).
+    let hom: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let w = weight(i);
+            [w * cps[i].x, w * cps[i].y, w]
+        })
+        .collect();
+    let at = |u: f64| -> Point {
+        let mut k = p;
+        while k < n - 1 && u >= knots[k + 1] {
+            k += 1;
+        }
+        let mut d: Vec<[f64; 3]> = (0..=p).map(|j| hom[j + k - p]).collect();
+        for r in 1..=p {
+            for j in (r..=p).rev() {
+                let i = j + k - p;
+                let span = knots[i + p + 1 - r] - knots[i];
+                let alpha = if span > 0.0 {
+                    (u - knots[i]) / span
+                } else {
+                    0.0
+                };
+                let prev = d[j - 1];
+                for (c, v) in d[j].iter_mut().enumerate() {
+                    *v = (1.0 - alpha) * prev[c] + alpha * *v;
+                }
+            }
+        }
+        [d[p][0] / d[p][2], d[p][1] / d[p][2]]
+    };
+    let tol = chord_tol_mm.max(1e-6);
+    let mut out = vec![at(knots[p])];
+    for span in knots[p..=n].windows(2) {
+        if span[1] <= span[0] {
+            continue;
+        }
+        // Four pieces per span first (a cubic span can turn back on itself), then bisection.
+        let mut stack: Vec<(f64, f64, u32)> = (0..4)
+            .rev()
+            .map(|q| {
+                let h = (span[1] - span[0]) / 4.0;
+                (span[0] + h * q as f64, span[0] + h * (q + 1) as f64, 0)
+            })
+            .collect();
+        while let Some((u0, u1, depth)) = stack.pop() {
+            let (a, b, mid) = (at(u0), at(u1), at(0.5 * (u0 + u1)));
+            let chord_mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            if depth < 16 && distance(mid, chord_mid) > tol {
+                let um = 0.5 * (u0 + u1);
+                stack.push((um, u1, depth + 1));
+                stack.push((u0, um, depth + 1));
+            } else {
+                out.push(b);
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn src(k: &str) -> Vec<EntityRef> {
+        vec![EntityRef {
+            kind: k.into(),
+            handle: "1".into(),
+            layer: "0".into(),
+        }]
+    }
+
+    fn seg(a: Point, b: Point, bulge: f64) -> Piece {
+        Piece {
+            vertices: vec![[a[0], a[1], bulge], [b[0], b[1], 0.0]],
+            closed: false,
+            sources: src("LINE"),
+        }
+    }
+
+    #[test]
+    fn chains_close_with_reversal_and_tolerance() {
+        // A square from four segments, one reversed and one end off by 5 µm.
+        let pieces = vec![
+            seg([0.0, 0.0], [10.0, 0.0], 0.0),
+            seg([10.0, 10.0], [10.0, 0.000_005], 0.0),
+            seg([10.0, 10.0], [0.0, 10.0], 0.0),
+            seg([0.0, 10.0], [0.0, 0.0], 0.0),
+        ];
+        let closed = chain_pieces(pieces, 0.01).unwrap();
+        assert_eq!(closed.len(), 1);
+        assert_eq!(closed[0].vertices.len(), 4);
+        assert_eq!(closed[0].sources.len(), 4);
+        let open = chain_pieces(vec![seg([0.0, 0.0], [1.0, 0.0], 0.0)], 0.01).unwrap_err();
+        assert_eq!(open.1, [1.0, 0.0]);
+    }
+
+    #[test]
+    fn self_intersecting_entity_is_named() {
+        use dxf::entities::LwPolyline;
+        use dxf::LwPolylineVertex;
+        let mut d = Drawing::new();
+        let mut lw = LwPolyline::default();
+        for (x, y) in [(0.0, 0.0), (10.0, 10.0), (10.0, 0.0), (0.0, 4.0)] {
+            lw.vertices.push(LwPolylineVertex {
+                x,
+                y,
+                ..Default::default()
+            });
+        }
+        lw.set_is_closed(true);
+        let mut e = Entity::new(EntityType::LwPolyline(lw));
+        e.common.layer = "BAD".into();
+        d.add_entity(e);
+        let opt = DxfOptions {
+            sheet: Some([20.0, 20.0]),
+            ..Default::default()
+        };
+        let err = layout_from_drawing(&d, "bow.dxf", &opt)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("bow.dxf: LWPOLYLINE #")
+                && err.ends_with("on layer 'BAD': the contour intersects itself"),
+            "{err}"
+        );
+    }
+
+    fn circle(x: f64, y: f64, r: f64) -> Entity {
+        Entity::new(EntityType::Circle(dxf::entities::Circle {
+            center: dxf::Point::new(x, y, 0.0),
+            radius: r,
+            ..Default::default()
+        }))
+    }
+
+    /// Degree-2 rational B-spline of a full circle: 9 control points on the square around it,
+    /// corner weights √2/2 (the textbook exact NURBS circle).
+    fn nurbs_circle(cx: f64, cy: f64, r: f64) -> Entity {
+        let w = std::f64::consts::FRAC_1_SQRT_2;
+        let sq = [
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (0.0, 1.0),
+            (-1.0, 1.0),
+            (-1.0, 0.0),
+            (-1.0, -1.0),
+            (0.0, -1.0),
+            (1.0, -1.0),
+            (1.0, 0.0),
+        ];
+        let mut sp = dxf::entities::Spline {
+            degree_of_curve: 2,
+            knot_values: vec![
+                0.0, 0.0, 0.0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1.0, 1.0, 1.0,
+            ],
+            weight_values: (0..9).map(|i| if i % 2 == 1 { w } else { 1.0 }).collect(),
+            control_points: sq
+                .iter()
+                .map(|&(x, y)| dxf::Point::new(cx + r * x, cy + r * y, 0.0))
+                .collect(),
+            ..Default::default()
+        };
+        sp.set_is_rational(true);
+        sp.set_is_closed(true);
+        Entity::new(EntityType::Spline(sp))
+    }
+
+    fn ring_areas(l: &Layout) -> Vec<f64> {
+        let mut a: Vec<f64> = l
+            .parts
+            .iter()
+            .flat_map(|p| std::iter::once(&p.outer).chain(&p.holes))
+            .map(|r| cell_geometry::signed_area(&r.points).abs())
+            .collect();
+        a.sort_by(f64::total_cmp);
+        a
+    }
+
+    #[test]
+    fn ellipse_spline_and_nested_inserts_become_contours() {
+        let mut d = Drawing::new();
+        // A NURBS circle r = 50 as a part's outer contour, an ELLIPSE 20 × 10 as its hole.
+        d.add_entity(nurbs_circle(100.0, 100.0, 50.0));
+        d.add_entity(Entity::new(EntityType::Ellipse(dxf::entities::Ellipse {
+            center: dxf::Point::new(100.0, 100.0, 0.0),
+            major_axis: dxf::Vector::new(0.0, 20.0, 0.0),
+            minor_axis_ratio: 0.5,
+            ..Default::default()
+        })));
+        // Annotation is ignored.
+        d.add_entity(Entity::new(EntityType::Text(dxf::entities::Text {
+            value: "PART 1".into(),
+            ..Default::default()
+        })));
+        // Block WASHER: a 6 × 6 square of LINEs (base (3, 3)) around a circle r = 1. Block
+        // PAIR holds two WASHERs 10 mm apart; the drawing places PAIR scaled 2, rotated 90°,
+        // as a 2-row array, so 4 washers (12 × 12 squares, r = 2 holes) at (300, 50 + …).
+        let mut washer = dxf::Block {
+            name: "WASHER".into(),
+            base_point: dxf::Point::new(3.0, 3.0, 0.0),
+            ..Default::default()
+        };
+        for (a, b) in [
+            ((0., 0.), (6., 0.)),
+            ((6., 0.), (6., 6.)),
+            ((0., 6.), (6., 6.)),
+            ((0., 0.), (0., 6.)),
+        ] {
+            washer
+                .entities
+                .push(Entity::new(EntityType::Line(dxf::entities::Line {
+                    p1: dxf::Point::new(a.0, a.1, 0.0),
+                    p2: dxf::Point::new(b.0, b.1, 0.0),
+                    ..Default::default()
+                })));
+        }
+        washer.entities.push(circle(3.0, 3.0, 1.0));
+        d.add_block(washer);
+        let mut pair = dxf::Block {
+            name: "PAIR".into(),
+            ..Default::default()
+        };
+        for x in [0.0, 10.0] {
+            pair.entities
+                .push(Entity::new(EntityType::Insert(dxf::entities::Insert {
+                    name: "washer".into(), // block names are case-insensitive
+                    location: dxf::Point::new(x, 0.0, 0.0),
+                    ..Default::default()
+                })));
+        }
+        d.add_block(pair);
+        d.add_entity(Entity::new(EntityType::Insert(dxf::entities::Insert {
+            name: "PAIR".into(),
+            location: dxf::Point::new(300.0, 50.0, 0.0),
+            x_scale_factor: 2.0,
+            y_scale_factor: 2.0,
+            rotation: 90.0,
+            row_count: 2,
+            row_spacing: 40.0,
+            ..Default::default()
+        })));
+        // ELLIPSE and SPLINE exist from R13 on; the dxf crate writes R12 unless told.
+        d.header.version = dxf::enums::AcadVersion::R2000;
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("mixed.dxf");
+        d.save_file(&file).unwrap();
+        let opt = DxfOptions {
+            sheet: Some([400.0, 300.0]),
+            chord_tol_mm: 0.01,
+            ..Default::default()
+        };
+        let l = read_dxf(&file, &opt).unwrap();
+        let mem = layout_from_drawing(&d, "mem", &opt).unwrap();
+        assert_eq!(mem.parts.len(), 5, "in memory: {:?}", ring_areas(&mem));
+        assert_eq!(
+            l.parts.len(),
+            5,
+            "one round part and four washers: {:?}",
+            ring_areas(&l)
+        );
+        let areas = ring_areas(&l);
+        let pi = std::f64::consts::PI;
+        let close = |got: f64, want: f64, rel: f64| (got - want).abs() <= rel * want;
+        assert!(
+            areas[..4].iter().all(|&a| close(a, pi * 4.0, 1e-2)),
+            "{areas:?}"
+        );
+        assert!(
+            areas[4..8].iter().all(|&a| close(a, 144.0, 1e-9)),
+            "{areas:?}"
+        );
+        assert!(
+            close(areas[8], pi * 200.0, 1e-3),
+            "ellipse 20 × 10: {}",
+            areas[8]
+        );
+        assert!(
+            close(areas[9], pi * 2500.0, 1e-3),
+            "NURBS circle r 50: {}",
+            areas[9]
+        );
+        // Every flattened NURBS point lies on the circle within the chord tolerance.
+        let round = l
+            .parts
+            .iter()
+            .find(|p| p.holes.len() == 1 && p.outer.points.len() > 40);
+        let outer = &round.expect("the round part").outer.points;
+        for q in outer {
+            let r = distance(*q, [100.0, 100.0]);
+            assert!((r - 50.0).abs() < 1e-9, "NURBS point {q:?} at radius {r}");
+        }
+        // The washers: rotated 90° then arrayed along the rotated y (−x in the drawing).
+        let mut centres: Vec<(i64, i64)> = l
+            .parts
+            .iter()
+            .filter(|p| p.outer.points.len() == 4)
+            .map(|p| {
+                let b = bbox(&p.outer.points);
+                (
+                    ((b[0] + b[2]) / 2.0).round() as i64,
+                    ((b[1] + b[3]) / 2.0).round() as i64,
+                )
+            })
+            .collect();
+        centres.sort();
+        assert_eq!(centres, vec![(260, 50), (260, 70), (300, 50), (300, 70)]);
+    }
+
+    #[test]
+    fn unreadable_geometry_and_missing_blocks_are_named() {
+        let opt = DxfOptions {
+            sheet: Some([100.0, 100.0]),
+            ..Default::default()
+        };
+        let mut d = Drawing::new();
+        d.add_entity(circle(50.0, 50.0, 10.0));
+        let mut face = Entity::new(EntityType::Face3D(Default::default()));
+        face.common.layer = "CUT".into();
+        d.add_entity(face);
+        let e = layout_from_drawing(&d, "f.dxf", &opt)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("f.dxf: 3DFACE #")
+                && e.contains("on layer 'CUT': this geometry cannot be read"),
+            "{e}"
+        );
+        let mut d = Drawing::new();
+        d.add_entity(Entity::new(EntityType::Insert(dxf::entities::Insert {
+            name: "NOPE".into(),
+            ..Default::default()
+        })));
+        let e = layout_from_drawing(&d, "i.dxf", &opt)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("INSERT #") && e.ends_with("block 'NOPE' is not defined"),
+            "{e}"
+        );
+        // A block that places itself.
+        let mut d = Drawing::new();
+        let mut b = dxf::Block {
+            name: "LOOP".into(),
+            ..Default::default()
+        };
+        b.entities
+            .push(Entity::new(EntityType::Insert(dxf::entities::Insert {
+                name: "LOOP".into(),
+                ..Default::default()
+            })));
+        d.add_block(b);
+        d.add_entity(Entity::new(EntityType::Insert(dxf::entities::Insert {
+            name: "LOOP".into(),
+            ..Default::default()
+        })));
+        let e = layout_from_drawing(&d, "l.dxf", &opt)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("block 'LOOP'") && e.contains("nested more than 16 deep"),
+            "{e}"
+        );
+        // A spline given only by fit points.
+        let mut d = Drawing::new();
+        d.add_entity(Entity::new(EntityType::Spline(dxf::entities::Spline {
+            degree_of_curve: 3,
+            fit_points: vec![
+                dxf::Point::new(1.0, 1.0, 0.0),
+                dxf::Point::new(5.0, 5.0, 0.0),
+            ],
+            ..Default::default()
+        })));
+        let e = layout_from_drawing(&d, "s.dxf", &opt)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("s.dxf: SPLINE #") && e.contains("fit points only"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn reversed_arcs_keep_their_geometry() {
+        // Half circle from (0,0) to (2,0), bulge 1 (counter-clockwise, below the chord).
+        let p = seg([0.0, 0.0], [2.0, 0.0], 1.0);
+        let r = p.reversed();
+        assert_eq!(r.vertices, vec![[2.0, 0.0, -1.0], [0.0, 0.0, 0.0]]);
+        // Two half circles make a circle of radius 1 whatever their direction.
+        let circle =
+            chain_pieces(vec![p, seg([0.0, 0.0], [2.0, 0.0], -1.0).reversed()], 1e-9).unwrap();
+        let pts = flatten(&circle[0], 0.001);
+        let area = cell_geometry::signed_area(&pts).abs();
+        assert!((area - std::f64::consts::PI).abs() < 0.01, "area {area}");
+    }
+}

@@ -1,0 +1,670 @@
+//! One sequencing job end to end (seed 003 §A4 `Main`, notes §A6 inputs → outputs): read the
+//! layout, build the [`Problem`], construct a plan with a [`Policy`], optionally
+//! improve it ([`crate::improve::improve`]), and simulate the final plan on the thermal raster
+//! (seed 003 §A3), reporting raster frames. When the improvement finds a better order, its
+//! own raster run of that order ([`crate::improve::ImproveOptions::run_best`]) is that
+//! simulation and streams the frames; a
+//! separate run is made only when the start order stays. The `sequencer` node and `cell sheet`
+//! are thin adapters around [`run`].
+//!
+//! **Pierce modes.** [`PierceMode::Fixed`]: one pierce point per contour (seed 003 §A1 `P_ij`):
+//! the layout's where it gives one, else the single best free candidate
+//! ([`PierceOptions`] with `max_candidates = 1`). [`PierceMode::Free`]: the layout's pierce
+//! point where it gives one, else up to `max_candidates` free candidates (the GTSP variant).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::cost::{CostParams, EvalError, Evaluator};
+use crate::dxf::{read_layout, DxfError, DxfOptions};
+use crate::improve::{improve, ImproveOptions, ImproveParams, Improved, Progress, Start};
+use crate::layout::{Layout, LayoutError, PierceOptions};
+use crate::plan::{Cut, CutPlan};
+use crate::policy::{construct, construct_cuts, Policy};
+use crate::precedence::{PrecedenceMode, Violation};
+use crate::problem::Problem;
+use crate::thermal::{CutThermal, Frame, SequencerParamError, ThermalParams};
+
+/// Where the layout comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LayoutSource {
+    /// A `.dxf` or `.json` file ([`read_layout`]).
+    File(PathBuf),
+    /// The JSON format inline ([`Layout::from_json_str`]), named `<layout_json>` in errors.
+    Json(String),
+}
+
+/// A sheet-job option given as a word: the goal's and the job's field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SheetOption {
+    /// `policy`: the construction policy.
+    Policy,
+    /// `precedence`: strict or relaxed precedence rules.
+    Precedence,
+    /// `pierce`: fixed or free pierce points.
+    Pierce,
+}
+
+impl SheetOption {
+    /// The field's name, as the goal and the job spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Policy => "policy",
+            Self::Precedence => "precedence",
+            Self::Pierce => "pierce",
+        }
+    }
+}
+
+impl std::fmt::Display for SheetOption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A word that names none of an option's choices: `policy "fastest": expected nearest, …`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{option} {given:?}: expected {choices}")]
+pub struct UnknownChoice {
+    /// Which option.
+    pub option: SheetOption,
+    /// The word given.
+    pub given: String,
+    /// The words accepted, for people (`fixed or free`).
+    pub choices: &'static str,
+}
+
+impl From<UnknownChoice> for String {
+    fn from(e: UnknownChoice) -> Self {
+        e.to_string()
+    }
+}
+
+/// How pierce candidates are chosen (module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum PierceMode {
+    /// One pierce point per contour.
+    Fixed,
+    /// Several candidates per contour where the layout fixes none.
+    #[default]
+    Free,
+}
+
+impl PierceMode {
+    /// Parses `fixed` / `free`.
+    ///
+    /// # Errors
+    /// Any other word, named.
+    pub fn parse(s: &str) -> Result<Self, UnknownChoice> {
+        match s {
+            "fixed" => Ok(PierceMode::Fixed),
+            "free" => Ok(PierceMode::Free),
+            _ => Err(UnknownChoice {
+                option: SheetOption::Pierce,
+                given: s.into(),
+                choices: "fixed or free",
+            }),
+        }
+    }
+}
+
+/// Parses a precedence mode, `strict` or `relaxed` (seed 003 §2 / notes §A2).
+///
+/// # Errors
+/// Any other word, named.
+pub fn parse_precedence(s: &str) -> Result<PrecedenceMode, UnknownChoice> {
+    match s {
+        "strict" => Ok(PrecedenceMode::Strict),
+        "relaxed" => Ok(PrecedenceMode::Relaxed),
+        _ => Err(UnknownChoice {
+            option: SheetOption::Precedence,
+            given: s.into(),
+            choices: "strict or relaxed",
+        }),
+    }
+}
+
+/// Parses a policy name (`nearest`, `min_overheat`, `random`, `path_overheat`, `cost_greedy`).
+///
+/// # Errors
+/// Any other word, named with the choices.
+pub fn parse_policy(s: &str) -> Result<Policy, UnknownChoice> {
+    Policy::ALL
+        .into_iter()
+        .find(|p| policy_name(*p) == s)
+        .ok_or_else(|| UnknownChoice {
+            option: SheetOption::Policy,
+            given: s.into(),
+            choices: "nearest, min_overheat, random, path_overheat or cost_greedy",
+        })
+}
+
+/// The snake-case name of a policy (as the action and the CLI spell it).
+pub fn policy_name(p: Policy) -> &'static str {
+    match p {
+        Policy::Nearest => "nearest",
+        Policy::MinOverheat => "min_overheat",
+        Policy::Random => "random",
+        Policy::PathOverheat => "path_overheat",
+        Policy::CostGreedy => "cost_greedy",
+    }
+}
+
+/// Everything one job needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SheetJob {
+    /// The layout.
+    pub layout: LayoutSource,
+    /// DXF reading options.
+    pub dxf: DxfOptions,
+    /// Precedence rules (seed 003 §2).
+    pub precedence: PrecedenceMode,
+    /// Pierce mode (module docs).
+    pub pierce: PierceMode,
+    /// Free pierce candidates.
+    pub pierce_options: PierceOptions,
+    /// Construction policy (seed 003 §A4).
+    pub policy: Policy,
+    /// Run the improvement phase.
+    pub improve: bool,
+    /// Improvement knobs (its `seed` is overridden by [`SheetJob::seed`]).
+    pub improve_params: ImproveParams,
+    /// Thermal raster constants (seed 003 §A3).
+    pub thermal: ThermalParams,
+    /// Cost weights.
+    pub cost: CostParams,
+    /// RNG seed of the random policy and the improvement.
+    pub seed: u64,
+}
+
+impl Default for SheetJob {
+    fn default() -> Self {
+        SheetJob {
+            layout: LayoutSource::Json(String::new()),
+            dxf: DxfOptions::default(),
+            precedence: PrecedenceMode::Strict,
+            pierce: PierceMode::Free,
+            pierce_options: PierceOptions::default(),
+            policy: Policy::Nearest,
+            improve: true,
+            improve_params: ImproveParams::default(),
+            thermal: ThermalParams::default(),
+            cost: CostParams::default(),
+            seed: 0,
+        }
+    }
+}
+
+/// Why a job failed; every message names the file, entity or field.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// The layout file cannot be read or is invalid (names file and entity or field).
+    #[error(transparent)]
+    Dxf(#[from] DxfError),
+    /// The inline layout JSON does not parse (the message names `<layout_json>` and the field).
+    #[error(transparent)]
+    Json(LayoutError),
+    /// The layout is invalid (`source_name` names the file or `<layout_json>`).
+    #[error("{source_name}: {error}")]
+    Layout {
+        /// The file or `<layout_json>`.
+        source_name: String,
+        /// The cause.
+        error: LayoutError,
+    },
+    /// A parameter or the problem is invalid.
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// An improvement parameter is invalid.
+    #[error(transparent)]
+    Param(#[from] SequencerParamError),
+    /// The precedence rules cannot be met.
+    #[error("precedence: {0}")]
+    Precedence(#[from] Violation),
+}
+
+/// Which stage a progress report is from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// Reading the layout and building the problem.
+    Load,
+    /// The greedy construction.
+    Construction,
+    /// The improvement phase.
+    Improvement,
+    /// The final thermal simulation.
+    Simulation,
+}
+
+impl Phase {
+    /// The phase's name, as the action feedback carries it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Load => "load",
+            Phase::Construction => "construction",
+            Phase::Improvement => "improvement",
+            Phase::Simulation => "simulation",
+        }
+    }
+}
+
+/// Figures of one phase (for reports).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PhaseFigures {
+    /// Which phase.
+    pub phase: Phase,
+    /// Wall-clock time, s.
+    pub seconds: f64,
+    /// Cost of the plan after it (0 for the load phase).
+    pub cost: f64,
+    /// Idle length after it, mm.
+    pub idle_mm: f64,
+    /// Overheats after it.
+    pub overheats: usize,
+}
+
+/// A progress report: the phase, the iteration in it and the best cost so far.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JobProgress {
+    /// Current phase.
+    pub phase: Phase,
+    /// Iteration within the phase (LNS iterations in the improvement).
+    pub iteration: usize,
+    /// Best cost so far (the improvement reports its surrogate cost).
+    pub best_cost: f64,
+    /// Idle length of the best plan known, mm (the construction's during the improvement).
+    pub best_idle_mm: f64,
+    /// Overheats of the best plan known (the construction's during the improvement; 0 until
+    /// known when a policy that does not read the raster is improved: then the construction's
+    /// raster run goes alongside the search, [`crate::improve::Start::Cuts`]).
+    pub best_overheats: usize,
+}
+
+/// What a job produced.
+#[derive(Debug, Clone)]
+pub struct SheetOutcome {
+    /// The problem the plan is for.
+    pub problem: Problem,
+    /// The final plan (metrics from the final simulation).
+    pub plan: CutPlan,
+    /// What cutting each contour of `plan` did on the raster, in cut order (empty when the
+    /// thermal cost is off); overheats sit at the cuts' pierce points.
+    pub per_cut: Vec<CutThermal>,
+    /// The construction's plan.
+    pub constructed: CutPlan,
+    /// Whether the improvement ran.
+    pub improved: bool,
+    /// Per-phase figures, in order.
+    pub phases: Vec<PhaseFigures>,
+    /// Total wall-clock time, s.
+    pub seconds: f64,
+}
+
+/// Reads the layout and builds the problem (seed 003 §A1, §2).
+///
+/// # Errors
+/// [`JobError::Dxf`] or [`JobError::Layout`], naming the file (or `<layout_json>`) and the
+/// entity or field.
+pub fn load_problem(job: &SheetJob) -> Result<Problem, JobError> {
+    let (layout, name) = match &job.layout {
+        LayoutSource::File(path) => (read_layout(path, &job.dxf)?, path.display().to_string()),
+        LayoutSource::Json(text) => {
+            let name = "<layout_json>".to_string();
+            let l = Layout::from_json_str(text, &name).map_err(JobError::Json)?;
+            (l, name)
+        }
+    };
+    let pierce = match job.pierce {
+        PierceMode::Fixed => PierceOptions {
+            max_candidates: 1,
+            ..job.pierce_options
+        },
+        PierceMode::Free => job.pierce_options,
+    };
+    layout
+        .to_problem(job.precedence, &pierce)
+        .map_err(|error| JobError::Layout {
+            source_name: name,
+            error,
+        })
+}
+
+/// Runs the job (module docs). `progress` gets a report at every phase change and after every
+/// improvement iteration; `frame` gets a raster frame every `frame_every` spread steps of the
+/// final simulation (seed 003 §A3).
+///
+/// # Errors
+/// [`JobError`]: a bad layout (naming file and entity or field), bad parameters (naming the
+/// field), or rules that cannot be met.
+pub fn run(
+    job: &SheetJob,
+    progress: impl FnMut(JobProgress),
+    frame_every: u64,
+    frame: &mut dyn FnMut(&Frame),
+) -> Result<SheetOutcome, JobError> {
+    run_until(job, progress, frame_every, frame, &|| false)
+}
+
+/// As [`run`], with a cancel hook: once `stop` returns true the improvement phase ends early
+/// ([`crate::improve::ImproveOptions::stop`]) and the job finishes with the best plan so far.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_until(
+    job: &SheetJob,
+    progress: impl FnMut(JobProgress),
+    frame_every: u64,
+    frame: &mut dyn FnMut(&Frame),
+    stop: &dyn Fn() -> bool,
+) -> Result<SheetOutcome, JobError> {
+    // Shared by the improvement's feedback and the best order's run.
+    let progress = std::cell::RefCell::new(progress);
+    let progress = |p: JobProgress| (progress.borrow_mut())(p);
+    let t0 = Instant::now();
+    let mut phases = Vec::new();
+    let report = |phase: Phase, plan: &CutPlan| JobProgress {
+        phase,
+        iteration: 0,
+        best_cost: plan.cost,
+        best_idle_mm: plan.idle_mm,
+        best_overheats: plan.overheats,
+    };
+    progress(report(Phase::Load, &CutPlan::default()));
+    let problem = load_problem(job)?;
+    phases.push(PhaseFigures {
+        phase: Phase::Load,
+        seconds: t0.elapsed().as_secs_f64(),
+        cost: 0.0,
+        idle_mm: 0.0,
+        overheats: 0,
+    });
+    let eval = Evaluator::new(&problem, job.thermal.clone(), job.cost.clone())?;
+    let mut params = job.improve_params.clone();
+    params.seed = job.seed;
+    if job.improve {
+        params.validate()?;
+    }
+
+    progress(report(Phase::Construction, &CutPlan::default()));
+    let t = Instant::now();
+    // The best plan's raster run with its per-cut figures, if the improvement already made it.
+    let mut simulated: Option<(CutPlan, Vec<CutThermal>)> = None;
+    // The improvement's run of its best order: it streams the frames and keeps its per-cut
+    // figures, so the final simulation below is only needed if the start order wins.
+    let mut best_run: Option<(CutPlan, Vec<CutThermal>)> = None;
+    let run_best = |best: &[Cut]| {
+        progress(report(Phase::Simulation, &eval.assemble(best, None)));
+        let (plan, per_cut) = simulate(&eval, best, frame_every, &mut *frame);
+        best_run = Some((plan.clone(), per_cut));
+        plan
+    };
+    let (constructed, best) = if job.improve && !job.policy.is_thermal() {
+        // The order alone; its raster run goes alongside the improvement's search.
+        let cuts = construct_cuts(&eval, job.policy, job.seed)?;
+        let order_s = t.elapsed().as_secs_f64();
+        let order = eval.assemble(&cuts, None);
+        progress(report(Phase::Construction, &order));
+        let t = Instant::now();
+        let start = JobProgress {
+            best_overheats: 0,
+            ..report(Phase::Improvement, &order)
+        };
+        progress(start);
+        let Improved {
+            start: constructed,
+            best: improved,
+        } = improve(
+            &eval,
+            Start::Cuts(&cuts),
+            ImproveOptions {
+                params,
+                feedback: Some(&mut |p: Progress| {
+                    progress(JobProgress {
+                        iteration: p.iteration,
+                        best_cost: p.best_cost,
+                        ..start
+                    })
+                }),
+                stop: Some(stop),
+                run_best: Some(Box::new(run_best)),
+            },
+        )?;
+        simulated = best_run.filter(|(plan, _)| *plan == improved);
+        phases.push(PhaseFigures {
+            seconds: order_s,
+            ..figures(Phase::Construction, t, &constructed)
+        });
+        phases.push(figures(Phase::Improvement, t, &improved));
+        (constructed, improved)
+    } else {
+        let constructed = construct(&eval, job.policy, job.seed)?;
+        phases.push(figures(Phase::Construction, t, &constructed));
+        progress(report(Phase::Construction, &constructed));
+        let best = if job.improve {
+            let t = Instant::now();
+            let start = report(Phase::Improvement, &constructed);
+            progress(start);
+            let improved = improve(
+                &eval,
+                Start::Plan(&constructed),
+                ImproveOptions {
+                    params,
+                    feedback: Some(&mut |p: Progress| {
+                        progress(JobProgress {
+                            iteration: p.iteration,
+                            best_cost: p.best_cost,
+                            ..start
+                        })
+                    }),
+                    stop: Some(stop),
+                    run_best: Some(Box::new(run_best)),
+                },
+            )?
+            .best;
+            simulated = best_run.filter(|(plan, _)| *plan == improved);
+            phases.push(figures(Phase::Improvement, t, &improved));
+            improved
+        } else {
+            constructed.clone()
+        };
+        (constructed, best)
+    };
+
+    let t = Instant::now();
+    let (plan, per_cut) = match simulated {
+        Some(done) => done,
+        None => {
+            progress(report(Phase::Simulation, &best));
+            simulate(&eval, &best.cuts, frame_every, frame)
+        }
+    };
+    phases.push(figures(Phase::Simulation, t, &plan));
+    progress(report(Phase::Simulation, &plan));
+    Ok(SheetOutcome {
+        problem,
+        plan,
+        per_cut,
+        constructed,
+        improved: job.improve,
+        phases,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The raster run of `cuts` (none with thermal cost off) with frames every `frame_every`
+/// steps: the plan and its per-cut figures.
+fn simulate(
+    eval: &Evaluator,
+    cuts: &[Cut],
+    frame_every: u64,
+    frame: &mut dyn FnMut(&Frame),
+) -> (CutPlan, Vec<CutThermal>) {
+    if !eval.cost_params().thermal {
+        return (eval.assemble(cuts, None), Vec::new());
+    }
+    let problem = eval.problem;
+    let mut sim = eval.sim().with_frames(frame_every.max(1), frame);
+    for c in cuts {
+        sim.cut_contour(&problem.contours[c.contour], c.point(problem));
+    }
+    let out = sim.finish(problem.start);
+    (eval.assemble(cuts, Some(&out)), out.per_cut)
+}
+
+fn figures(phase: Phase, t: Instant, plan: &CutPlan) -> PhaseFigures {
+    PhaseFigures {
+        phase,
+        seconds: t.elapsed().as_secs_f64(),
+        cost: plan.cost,
+        idle_mm: plan.idle_mm,
+        overheats: plan.overheats,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn data(name: &str) -> PathBuf {
+        PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tests/data/sheet"
+        ))
+        .join(name)
+    }
+
+    /// The plate nest with `policy` and a short improvement.
+    fn plate_job(policy: Policy) -> SheetJob {
+        SheetJob {
+            layout: LayoutSource::File(data("plate_holes_nest.json")),
+            policy,
+            improve_params: ImproveParams {
+                max_iterations: 20,
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+    }
+
+    /// The frames of one raster run of `out`'s plan at `every` steps: its steps, once each
+    /// (a second run would start over).
+    fn assert_one_run_of_frames(out: &SheetOutcome, job: &SheetJob, frames: &[u64], every: u64) {
+        let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
+        let expected: Vec<u64> = (1..=steps / every).map(|k| every * k).collect();
+        assert_eq!(frames, expected);
+    }
+
+    #[test]
+    fn a_job_cuts_every_contour_once_in_a_valid_order_and_reports_frames() {
+        let job = plate_job(Policy::PathOverheat);
+        let mut phases = Vec::new();
+        let mut frames = Vec::new();
+        let out = run(&job, |p| phases.push(p.phase), 50, &mut |f| {
+            frames.push(f.step)
+        })
+        .unwrap();
+        let mut order = out.plan.order();
+        out.problem.precedence.check_order(&order).unwrap();
+        order.sort_unstable();
+        assert_eq!(order, (0..out.problem.contours.len()).collect::<Vec<_>>());
+        // One raster run streamed (the improvement's run of its best order, or the final
+        // simulation if there was none).
+        assert_one_run_of_frames(&out, &job, &frames, 50);
+        assert!(phases.contains(&Phase::Improvement));
+        assert_eq!(*phases.last().unwrap(), Phase::Simulation);
+        assert!(out.plan.cost <= out.constructed.cost + 1e-9);
+        assert_eq!(out.per_cut.len(), out.plan.cuts.len());
+        let per_cut: usize = out
+            .per_cut
+            .iter()
+            .map(|c| c.pierce_overheats + c.segment_overheats)
+            .sum();
+        assert_eq!(per_cut, out.plan.overheats);
+    }
+
+    /// A policy that does not read the raster: its raster run goes alongside the search, and
+    /// the job reports the same construction as the plain one.
+    #[test]
+    fn nearest_with_improvement_reports_the_evaluated_construction() {
+        let job = plate_job(Policy::Nearest);
+        let mut frames = Vec::new();
+        let out = run(&job, |_| {}, 50, &mut |f| frames.push(f.step)).unwrap();
+        let eval = Evaluator::new(&out.problem, job.thermal.clone(), job.cost.clone()).unwrap();
+        assert_eq!(
+            out.constructed,
+            construct(&eval, Policy::Nearest, job.seed).unwrap()
+        );
+        assert!(
+            out.constructed.overheats > 0,
+            "the plate's nearest order overheats"
+        );
+        let kinds: Vec<Phase> = out.phases.iter().map(|p| p.phase).collect();
+        assert_eq!(
+            kinds,
+            [
+                Phase::Load,
+                Phase::Construction,
+                Phase::Improvement,
+                Phase::Simulation
+            ]
+        );
+        assert_eq!(out.phases[1].overheats, out.constructed.overheats);
+        assert!(out.plan.cost <= out.constructed.cost + 1e-9);
+        assert_eq!(out.plan, eval.evaluate(&out.plan.cuts));
+        // The improved order won, so its raster run inside the improvement streamed the
+        // frames and no other run did.
+        assert!(out.plan.cost < out.constructed.cost);
+        assert_one_run_of_frames(&out, &job, &frames, 50);
+        assert_eq!(out.per_cut.len(), out.plan.cuts.len());
+    }
+
+    #[test]
+    fn bad_layouts_name_the_source_and_the_entity_or_field() {
+        let job = SheetJob {
+            layout: LayoutSource::File(data("broken_open_chain.dxf")),
+            ..Default::default()
+        };
+        let e = run(&job, |_| {}, 1, &mut |_| {}).unwrap_err().to_string();
+        assert!(
+            e.contains("broken_open_chain.dxf") && e.contains("open contour"),
+            "{e}"
+        );
+        let job = SheetJob {
+            layout: LayoutSource::Json(r#"{"sheet": [100, 100], "parts": [{"outer": 3}]}"#.into()),
+            ..Default::default()
+        };
+        let e = run(&job, |_| {}, 1, &mut |_| {}).unwrap_err().to_string();
+        assert!(
+            e.contains("<layout_json>") && e.contains("parts[0].outer"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn names_parse_both_ways() {
+        for p in Policy::ALL {
+            assert_eq!(parse_policy(policy_name(p)), Ok(p));
+        }
+        assert!(parse_policy("fastest")
+            .unwrap_err()
+            .to_string()
+            .contains("fastest"));
+        assert_eq!(parse_precedence("relaxed"), Ok(PrecedenceMode::Relaxed));
+        assert!(parse_precedence("loose").is_err());
+        assert_eq!(PierceMode::parse("fixed"), Ok(PierceMode::Fixed));
+    }
+
+    #[test]
+    fn fixed_pierce_mode_gives_one_candidate_per_contour() {
+        let job = SheetJob {
+            layout: LayoutSource::File(data("plate_holes_nest.json")),
+            pierce: PierceMode::Fixed,
+            ..Default::default()
+        };
+        let p = load_problem(&job).unwrap();
+        assert!(p.contours.iter().all(|c| c.pierce_candidates.len() == 1));
+    }
+}
