@@ -1,6 +1,6 @@
 //! `cell bag info BAG`, `cell bag repair BAG` and `cell bag to-rerun BAG`: rosbag2 MCAP bags
 //! without DDS, through [`cell_bag`]; `cell bag play BAG`: the bag republished over DDS, through
-//! [`cell_replayer`].
+//! [`replayer`].
 //!
 //! - `info` prints topics, types, counts, duration, size and files, like `ros2 bag info`.
 //! - `to-rerun` converts a bag into a Rerun recording (see [`crate::bag_rerun`]).

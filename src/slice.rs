@@ -25,9 +25,9 @@
 use std::{path::PathBuf, process::ExitCode};
 
 use cell_slicer::job::{self, PartSource, SliceJob};
-use slicer::{cap_speeds, placement_for, FRAME_ID};
 use cell_slicer::to_msg::layer_stack_msg;
 use clap::Args;
+use slicer::{cap_speeds, placement_for, FRAME_ID};
 
 use crate::exit::{bad_data, failure, usage};
 use serde::Serialize;

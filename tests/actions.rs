@@ -5,10 +5,10 @@
 mod common;
 
 use cell_msgs::{PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult};
-use probe::{test_block, ProbeParams};
 use cell_runtime::action::{ActionClient, AsyncActionServer, GoalEndStatus, GoalStatusEnum};
 use cell_runtime::CellNode;
 use common::{discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal};
+use probe::{test_block, ProbeParams};
 
 /// A `planner` node serving `/plan_hotwire` and an `operator` node with a client for it, on a
 /// fresh domain.

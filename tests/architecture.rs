@@ -40,7 +40,14 @@ const IO_FORBIDS: &[&str] = &[
 ];
 
 /// The message crate, with its default features (the `ros2` feature is for nodes).
-const MESSAGES_FORBIDS: &[&str] = &["cell_runtime", "tokio", "rerun", "ros2-client", "rustdds", "iceoryx2"];
+const MESSAGES_FORBIDS: &[&str] = &[
+    "cell_runtime",
+    "tokio",
+    "rerun",
+    "ros2-client",
+    "rustdds",
+    "iceoryx2",
+];
 
 fn forbidden_for(layer: &str) -> &'static [&'static str] {
     match layer {
@@ -70,7 +77,11 @@ fn members() -> Vec<Member> {
         .args(["metadata", "--no-deps", "--format-version", "1"])
         .output()
         .expect("run cargo metadata");
-    assert!(out.status.success(), "cargo metadata: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "cargo metadata: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let meta: serde_json::Value = serde_json::from_slice(&out.stdout).expect("cargo metadata JSON");
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     meta["packages"]
@@ -83,7 +94,9 @@ fn members() -> Vec<Member> {
             Member {
                 name: p["name"].as_str().unwrap().to_string(),
                 dir: dir.to_string_lossy().into_owned(),
-                layer: p["metadata"]["cellsuite"]["layer"].as_str().map(str::to_string),
+                layer: p["metadata"]["cellsuite"]["layer"]
+                    .as_str()
+                    .map(str::to_string),
                 bins: p["targets"]
                     .as_array()
                     .unwrap()
@@ -104,9 +117,10 @@ fn layout_problem(m: &Member) -> Option<String> {
         ("", _) if m.name == "cellsuite" => None,
         ("msgs", Some("messages")) => None,
         ("crates", Some("algorithm" | "io" | "runtime")) if m.name == format!("cell_{dir}") => None,
-        ("crates", Some("algorithm" | "io" | "runtime")) => {
-            Some(format!("{} is in crates/{dir}, so its package is named cell_{dir}", m.name))
-        }
+        ("crates", Some("algorithm" | "io" | "runtime")) => Some(format!(
+            "{} is in crates/{dir}, so its package is named cell_{dir}",
+            m.name
+        )),
         ("nodes", Some("node")) if m.name == dir && m.bins.iter().any(|b| b == dir) => None,
         ("nodes", Some("node")) => Some(format!(
             "{} is in nodes/{dir}, so its package and its binary are named {dir} (binaries: {:?})",
@@ -116,7 +130,10 @@ fn layout_problem(m: &Member) -> Option<String> {
             "{} ({}) declares no layer: add [package.metadata.cellsuite] layer = \"…\"",
             m.name, m.dir
         )),
-        (_, Some(layer)) => Some(format!("{} ({}) has layer {layer:?}, which does not belong there", m.name, m.dir)),
+        (_, Some(layer)) => Some(format!(
+            "{} ({}) has layer {layer:?}, which does not belong there",
+            m.name, m.dir
+        )),
     }
 }
 
@@ -145,10 +162,24 @@ fn forbidden_chains(tree: &str, forbidden: &[&str]) -> Vec<String> {
 
 fn dependency_tree(package: &str) -> String {
     let out = cargo()
-        .args(["tree", "-p", package, "-e", "normal,build,dev", "--prefix", "depth", "-f", "{p}"])
+        .args([
+            "tree",
+            "-p",
+            package,
+            "-e",
+            "normal,build,dev",
+            "--prefix",
+            "depth",
+            "-f",
+            "{p}",
+        ])
         .output()
         .expect("run cargo tree");
-    assert!(out.status.success(), "cargo tree -p {package}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "cargo tree -p {package}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8(out.stdout).unwrap()
 }
 
@@ -172,18 +203,31 @@ fn algorithm_and_io_crates_depend_on_nothing_their_layer_forbids() {
     let mut checked = Vec::new();
     let mut problems = Vec::new();
     for m in &members {
-        let Some(layer) = m.layer.as_deref() else { continue };
+        let Some(layer) = m.layer.as_deref() else {
+            continue;
+        };
         let forbidden = forbidden_for(layer);
         if forbidden.is_empty() {
             continue;
         }
         checked.push(m.name.as_str());
         for chain in forbidden_chains(&dependency_tree(&m.name), forbidden) {
-            problems.push(format!("{} ({layer}) depends on {}: {chain}", m.name, chain.rsplit(" -> ").next().unwrap()));
+            problems.push(format!(
+                "{} ({layer}) depends on {}: {chain}",
+                m.name,
+                chain.rsplit(" -> ").next().unwrap()
+            ));
         }
     }
-    assert!(checked.contains(&"cell_planner") && checked.contains(&"cell_grbl"), "checked only {checked:?}");
-    assert!(problems.is_empty(), "forbidden dependencies:\n{}", problems.join("\n"));
+    assert!(
+        checked.contains(&"cell_planner") && checked.contains(&"cell_grbl"),
+        "checked only {checked:?}"
+    );
+    assert!(
+        problems.is_empty(),
+        "forbidden dependencies:\n{}",
+        problems.join("\n")
+    );
 }
 
 #[test]
@@ -213,8 +257,20 @@ fn the_check_names_the_chain_to_a_forbidden_dependency() {
         layer: layer.map(str::to_string),
         bins: bins.iter().map(|b| b.to_string()).collect(),
     };
-    assert!(layout_problem(&node("planner", "nodes/planner", &["planner"], Some("node"))).is_none());
-    assert!(layout_problem(&node("cell_bridge", "nodes/bridge", &["machine_bridge"], Some("node"))).is_some());
+    assert!(layout_problem(&node(
+        "planner",
+        "nodes/planner",
+        &["planner"],
+        Some("node")
+    ))
+    .is_none());
+    assert!(layout_problem(&node(
+        "cell_bridge",
+        "nodes/bridge",
+        &["machine_bridge"],
+        Some("node")
+    ))
+    .is_some());
     assert!(layout_problem(&node("planner", "crates/planner", &[], Some("algorithm"))).is_some());
     assert!(layout_problem(&node("cell_x", "crates/x", &[], None)).is_some());
     assert!(layout_problem(&node("cell_x", "crates/x", &[], Some("node"))).is_some());

@@ -10,7 +10,6 @@ mod common;
 use std::path::Path;
 use std::time::Duration;
 
-use machine_bridge::{run, BridgeParams};
 use cell_grbl::program::{CleanOptions, Program};
 use cell_grbl::protocol::{MachineState, Realtime};
 use cell_grbl::sim::{self, Faults, SimConfig, SimEvent, SimHandle};
@@ -25,6 +24,7 @@ use cell_runtime::action::ActionClient;
 use cell_runtime::{CellNode, QosPreset, Subscriber};
 use common::{discover_action_server, fresh_domain, node, within, DELIVERY_TIMEOUT};
 use futures::StreamExt;
+use machine_bridge::{run, BridgeParams};
 
 type Client = ActionClient<ExecuteProgramGoal, R, ExecuteProgramFeedback>;
 

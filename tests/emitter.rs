@@ -8,7 +8,6 @@ mod common;
 
 use std::process::{Command, Output};
 
-use emitter::{run, EmitterParams};
 use cell_msgs::{
     geometry_msgs::Point, EmitProgramRequest, EmitProgramResponse, MachineProgram,
     PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath, ToolpathSegment,
@@ -16,6 +15,7 @@ use cell_msgs::{
 use cell_profiles::MachineProfile;
 use cell_runtime::QosPreset;
 use common::{discover_action_server, follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
+use emitter::{run, EmitterParams};
 
 /// A closed 100 × 70 mm rectangle cut inside grbl-xy's travel, with a lead-in.
 fn rectangle(job_id: &str) -> Toolpath {

@@ -3,9 +3,9 @@
 
 mod common;
 
-use monitor::MonitorParams;
 use cell_runtime::{args::NodeArgs, CellNode, NodeSetup};
 use common::{fresh_domain, DELIVERY_TIMEOUT};
+use monitor::MonitorParams;
 use ros2_client::{
     dds::rustdds::DomainParticipantBuilder,
     rcl_interfaces::{

@@ -7,11 +7,11 @@ mod common;
 use cell_msgs::{
     HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath, ToolpathSegment,
 };
-use planner::{run, PlannerParams};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
 use common::{
     discover_action_server, follow_goal, fresh_domain, node, within, FollowedGoal, DELIVERY_TIMEOUT,
 };
+use planner::{run, PlannerParams};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn planner_node_plans_a_goal_and_survives_a_bad_one() {

@@ -13,8 +13,6 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use cell_bag::{BagWriter, QosProfile};
-use machine_bridge::BridgeParams;
-use emitter::EmitterParams;
 use cell_grbl::program::{CleanOptions, Program};
 use cell_grbl::sim::{self, SimConfig, SimHandle};
 use cell_msgs::std_msgs::StringMsg;
@@ -22,11 +20,13 @@ use cell_msgs::std_srvs::{SetBoolRequest, SetBoolResponse};
 use cell_msgs::{
     MachineProgram, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, RosMessage, Toolpath,
 };
+use cell_runtime::{action::GoalStatusEnum, CellNode, NodeSetup, QosPreset, Shutdown};
+use common::{discover_action_server, follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
+use emitter::EmitterParams;
+use machine_bridge::BridgeParams;
 use planner::PlannerParams;
 use recorder::RecorderParams;
 use replayer::{Replay, ReplaySummary, ReplayerParams};
-use cell_runtime::{action::GoalStatusEnum, CellNode, NodeSetup, QosPreset, Shutdown};
-use common::{discover_action_server, follow_goal, fresh_domain, node, within, DELIVERY_TIMEOUT};
 
 /// A bag's first log time (any fixed epoch time).
 const T0_NS: u64 = 1_763_800_000_000_000_000;

@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 
 use cell_msgs::{LayerStack, SliceFeedback, SliceGoal, SliceResult, Toolpath, ToolpathSegment};
 use cell_runtime::{action::GoalStatusEnum, QosPreset};
-use slicer::{run, SlicerParams};
 use common::{discover_action_server, within, DELIVERY_TIMEOUT};
 use futures::StreamExt;
+use slicer::{run, SlicerParams};
 
 fn stl(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

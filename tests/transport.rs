@@ -7,9 +7,9 @@ mod common;
 use std::time::Duration;
 
 use cell_msgs::{to_cdr, HeatMap, Toolpath};
-use probe::{hot_spot, test_block, ProbeParams};
 use cell_runtime::{QosPreset, Received, Subscriber, Via};
 use common::{fresh_domain, node, DELIVERY_TIMEOUT};
+use probe::{hot_spot, test_block, ProbeParams};
 
 /// Publishes `make()` every 100 ms until the subscriber has one, then returns it.
 async fn deliver<T: cell_msgs::RosMessage>(

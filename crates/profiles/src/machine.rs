@@ -101,7 +101,7 @@ impl MachineProfile {
 
     /// Checks the values, section by section: the axes (letters A–Z, finite min < max), the
     /// feed limit (> 0), the process's sections (a `hotwire` section exactly on a hot-wire
-    /// machine), the hot-wire towers ([`MachineProfile::validate_hotwire`]), the G-code
+    /// machine), the hot-wire towers (`hotwire.rs`), the G-code
     /// settings ([`GcodeSettings::validate`]) and the RAPID settings
     /// ([`RapidSettings::validate`], exclusive with G-code).
     ///

@@ -25,10 +25,10 @@ use std::time::{Duration, Instant};
 
 use cell_bag::BagReader;
 use cell_msgs::{HeatMap, MachineStatus, RosMessage};
-use recorder::RecorderParams;
-use replayer::{Replay, ReplayerParams};
 use cell_runtime::node::ParticipantGuard;
 use cell_runtime::{CellNode, FastPathMode, NodeSetup, QosPreset};
+use recorder::RecorderParams;
+use replayer::{Replay, ReplayerParams};
 
 /// Domains far from those the tests pick (100..=227), so a test run elsewhere does not interfere.
 const DOMAINS: [u16; 4] = [229, 230, 231, 232];
