@@ -1,8 +1,9 @@
 //! The layout is the architecture (ARCHITECTURE.md), checked:
 //!
 //! - every workspace crate declares its layer (`[package.metadata.cellsuite] layer = "…"`), and
-//!   its folder agrees with it: `crates/<dir>` holds libraries (`algorithm`, `io`, `runtime`)
-//!   named `cell_<dir>`, `nodes/<dir>` holds node crates named `<dir>` whose binary is `<dir>`;
+//!   its folder agrees with it: `crates/<dir>` holds libraries (`algorithm`, `io`, `runtime`,
+//!   and `test` support that is only ever a dev-dependency) named `cell_<dir>`, `nodes/<dir>`
+//!   holds node crates named `<dir>` whose binary is `<dir>`;
 //! - a crate's dependency tree, as `cargo test -p` of that crate builds it (its own
 //!   dev-dependencies included, features resolved for it alone), holds none of the crates its
 //!   layer forbids: an algorithm crate knows nothing of ROS, DDS, tokio or Rerun, an I/O crate
@@ -64,6 +65,8 @@ struct Member {
     dir: String,
     layer: Option<String>,
     bins: Vec<String>,
+    /// What it depends on outside `[dev-dependencies]` (normal and build dependencies).
+    non_dev_deps: Vec<String>,
 }
 
 fn cargo() -> Command {
@@ -104,6 +107,13 @@ fn members() -> Vec<Member> {
                     .filter(|t| t["kind"].as_array().unwrap().iter().any(|k| k == "bin"))
                     .map(|t| t["name"].as_str().unwrap().to_string())
                     .collect(),
+                non_dev_deps: p["dependencies"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|d| d["kind"] != "dev")
+                    .map(|d| d["name"].as_str().unwrap().to_string())
+                    .collect(),
             }
         })
         .collect()
@@ -116,7 +126,11 @@ fn layout_problem(m: &Member) -> Option<String> {
     match (folder, layer) {
         ("", _) if m.name == "cellsuite" => None,
         ("msgs", Some("messages")) => None,
-        ("crates", Some("algorithm" | "io" | "runtime")) if m.name == format!("cell_{dir}") => None,
+        ("crates", Some("algorithm" | "io" | "runtime" | "test"))
+            if m.name == format!("cell_{dir}") =>
+        {
+            None
+        }
         ("crates", Some("algorithm" | "io" | "runtime")) => Some(format!(
             "{} is in crates/{dir}, so its package is named cell_{dir}",
             m.name
@@ -231,6 +245,30 @@ fn algorithm_and_io_crates_depend_on_nothing_their_layer_forbids() {
 }
 
 #[test]
+fn test_support_is_only_ever_a_dev_dependency() {
+    let members = members();
+    let support: Vec<&str> = members
+        .iter()
+        .filter(|m| m.layer.as_deref() == Some("test"))
+        .map(|m| m.name.as_str())
+        .collect();
+    assert!(
+        support.contains(&"cell_testkit"),
+        "test-support crates: {support:?}"
+    );
+    let problems: Vec<String> = members
+        .iter()
+        .flat_map(|m| {
+            m.non_dev_deps
+                .iter()
+                .filter(|d| support.contains(&d.as_str()))
+                .map(move |d| format!("{} depends on {d} outside [dev-dependencies]", m.name))
+        })
+        .collect();
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
 fn the_check_names_the_chain_to_a_forbidden_dependency() {
     // What `cargo tree` prints for an algorithm crate that gained a runtime dependency through
     // a dev-dependency on another crate.
@@ -256,6 +294,7 @@ fn the_check_names_the_chain_to_a_forbidden_dependency() {
         dir: dir.into(),
         layer: layer.map(str::to_string),
         bins: bins.iter().map(|b| b.to_string()).collect(),
+        non_dev_deps: Vec::new(),
     };
     assert!(layout_problem(&node(
         "planner",

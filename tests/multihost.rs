@@ -1,9 +1,7 @@
 //! Two hosts, simulated by two network namespaces joined by a veth pair: a probe on one and a
 //! monitor on the other discover each other over DDS (multicast SPDP on the veth link) and
 //! exchange a Toolpath and heat maps. Needs root and iproute2 (CI has both); elsewhere the test
-//! says why it did not run, and under CI it fails instead ([`common::require_tool`]).
-
-mod common;
+//! says why it did not run, and under CI it fails instead ([`cell_testkit::require_tool`]).
 
 use std::process::{Command, Output};
 
@@ -48,7 +46,7 @@ fn can_make_namespaces() -> Result<(), String> {
 
 #[test]
 fn nodes_in_two_network_namespaces_exchange_a_toolpath_over_dds() {
-    if !common::require_tool(
+    if !cell_testkit::require_tool(
         "root and iproute2 (network namespaces)",
         can_make_namespaces(),
         "run the tests as root; `scripts/test` installs iproute2",

@@ -313,7 +313,7 @@ fn cell_sheet_writes_plan_program_and_report() {
         plan.order.len(),
         "{text}"
     );
-    if !common::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     let canon = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/interp/canon.py");

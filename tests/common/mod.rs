@@ -97,138 +97,15 @@ where
     })
 }
 
-/// Whether a test may run, given whether the outside tool it needs is here (`found`). When it
-/// is not: under CI (`CI` set, not empty, `0` or `false`) the test fails; elsewhere this prints
-/// one `skipped:` line naming the test, the tool and how to install it (straight to stderr, past
-/// the test harness's capture; `scripts/test` repeats these lines before its totals) and returns
-/// `false`, and the caller returns early. The one rule for every test that needs a tool from
-/// outside the workspace.
-pub fn require_tool(tool: &str, found: Result<(), String>, how_to_install: &str) -> bool {
-    use std::io::Write;
-    let Err(why) = found else { return true };
-    let ci = std::env::var("CI").is_ok_and(|v| !matches!(v.as_str(), "" | "0" | "false"));
-    assert!(
-        !ci,
-        "needs {tool}: {why}; CI must have it: {how_to_install}"
-    );
-    let thread = std::thread::current();
-    let test = thread.name().filter(|n| *n != "main").unwrap_or("a test");
-    // One write, so the line stays whole among the harness's own output.
-    let line = format!("skipped: {test}: needs {tool}: {why}; install: {how_to_install}\n");
-    let _ = std::io::stderr().write_all(line.as_bytes());
-    false
-}
-
-/// LinuxCNC's RS274NGC interpreter as `tests/interp/canon.py` runs it: `/usr/bin/rs274` and the
-/// `gcode` module of Debian's `/usr/bin/python3` (what `tests/interp/install.sh` checks).
-pub fn linuxcnc_interpreter() -> Result<(), String> {
-    if !std::path::Path::new("/usr/bin/rs274").is_file() {
-        return Err("no /usr/bin/rs274".into());
-    }
-    let import = std::process::Command::new("/usr/bin/python3")
-        .args(["-c", "import gcode"])
-        .output()
-        .map_err(|e| format!("/usr/bin/python3: {e}"))?;
-    if !import.status.success() {
-        return Err("/usr/bin/python3 cannot import gcode".into());
-    }
-    Ok(())
-}
-
-/// Whether LinuxCNC's interpreter is here, by [`require_tool`]'s rule.
-pub fn linuxcnc_interpreter_here() -> bool {
-    require_tool(
-        "LinuxCNC's RS274NGC interpreter",
-        linuxcnc_interpreter(),
-        "`scripts/test` (or, as root, `bash tests/interp/install.sh`: Debian's linuxcnc-uspace)",
-    )
-}
-
-/// A Python with `requirements` installed: `CELL_TEST_PYTHON` if set, else a virtualenv
-/// `CARGO_TARGET_TMPDIR/<name>` created and filled from PyPI on first use (when `import` fails
-/// in it), so `cargo test` needs no manual set-up. `None` when the venv cannot be made (no
-/// Python 3 with venv, no PyPI), after [`require_tool`] said so (or failed the test under CI).
-/// Made once per test binary: later calls get the first one's outcome.
+/// A Python with `requirements` (a path from the workspace root) installed, in the venv
+/// `CARGO_TARGET_TMPDIR/<name>`: [`cell_testkit::venv_python`].
 pub fn venv_python(name: &str, requirements: &str, import: &str) -> Option<std::path::PathBuf> {
-    use std::collections::HashMap;
-    use std::path::PathBuf;
-    use std::sync::Mutex;
-    static MADE: Mutex<Option<HashMap<String, Result<(), String>>>> = Mutex::new(None);
-    if let Ok(python) = std::env::var("CELL_TEST_PYTHON") {
-        return Some(PathBuf::from(python));
-    }
-    let made = MADE
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .get_or_insert_with(HashMap::new)
-        .entry(name.to_string())
-        .or_insert_with(|| make_venv(name, requirements, import))
-        .clone();
-    require_tool(
-        &format!("the PyPI packages of {requirements}"),
-        made,
-        "Python 3 with venv (`scripts/test` installs python3-venv) and access to PyPI",
+    cell_testkit::venv_python(
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")),
+        name,
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(requirements),
+        import,
     )
-    .then(|| {
-        PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-            .join(name)
-            .join("bin/python")
-    })
-}
-
-/// Creates (or completes) the venv of [`venv_python`]: `Err` when Python, venv or pip fails.
-fn make_venv(name: &str, requirements: &str, import: &str) -> Result<(), String> {
-    use std::path::PathBuf;
-    use std::process::Command;
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let python = venv.join("bin/python");
-    let ready = |python: &std::path::Path| {
-        Command::new(python)
-            .args(["-c", &format!("import {import}")])
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    if ready(&python) {
-        return Ok(());
-    }
-    let requirements = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(requirements);
-    let run = |cmd: &mut Command| {
-        let program = cmd.get_program().to_string_lossy().into_owned();
-        let out = cmd.output().map_err(|e| format!("{program}: {e}"))?;
-        if out.status.success() {
-            return Ok(());
-        }
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        let last = stderr.lines().rfind(|l| !l.trim().is_empty()).unwrap_or("");
-        let args: Vec<_> = cmd
-            .get_args()
-            .take(3)
-            .map(|a| a.to_string_lossy())
-            .collect();
-        Err(format!(
-            "`{program} {}` failed: {}",
-            args.join(" "),
-            last.trim()
-        ))
-    };
-    run(Command::new("python3").args(["-m", "venv"]).arg(&venv))?;
-    run(Command::new(&python)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "-r",
-        ])
-        .arg(&requirements))?;
-    assert!(
-        ready(&python),
-        "{} cannot import {import} after installing {}",
-        python.display(),
-        requirements.display()
-    );
-    Ok(())
 }
 
 /// Every message of an `.rrd` file, decoded by Rerun's own decoder, as one debug string to

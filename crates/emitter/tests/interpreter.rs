@@ -2,7 +2,7 @@
 //! (`tests/interp/canon.py`, Debian's `linuxcnc-uspace`; `scripts/test` installs it with
 //! `tests/interp/install.sh`): accepted, and the interpreter's canonical moves land on the
 //! toolpath's points with the toolpath's timing. Without the interpreter each test says so and
-//! skips, except under CI, where it fails ([`common::tool::require_tool`]).
+//! skips, except under CI, where it fails ([`cell_testkit::require_tool`]).
 
 mod common;
 
@@ -124,7 +124,7 @@ fn check_against_toolpath(tp: &Toolpath, json: &Value, four_axis: bool) {
 
 #[test]
 fn tapered_panel_on_linuxcnc_xyuv_is_accepted_with_its_points_and_timing() {
-    if !common::tool::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     let tip = TipSection {
@@ -182,7 +182,7 @@ fn tapered_panel_on_linuxcnc_xyuv_is_accepted_with_its_points_and_timing() {
 
 #[test]
 fn straight_cut_on_grbl_xy_is_accepted_with_its_points_and_timing() {
-    if !common::tool::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     let planned = plan(&job(None), |_| ControlFlow::Continue(())).unwrap();
@@ -387,7 +387,7 @@ fn canon_axes(profile: &MachineProfile) -> String {
 
 #[test]
 fn every_dialect_sample_is_accepted_and_traces_its_toolpath() {
-    if !common::tool::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     for (name, tp) in common::dialect_samples() {
@@ -432,7 +432,7 @@ fn every_dialect_sample_is_accepted_and_traces_its_toolpath() {
 
 #[test]
 fn planned_panels_run_on_every_four_axis_dialect() {
-    if !common::tool::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     let tip = TipSection {
@@ -459,7 +459,7 @@ fn planned_panels_run_on_every_four_axis_dialect() {
 
 #[test]
 fn the_trace_check_catches_a_point_the_program_misses() {
-    if !common::tool::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     let profile = MachineProfile::resolve("grbl-laser").unwrap();
@@ -511,7 +511,7 @@ fn rs274(text: &str) -> (i32, String, String) {
 
 #[test]
 fn xyzabc_programs_pass_the_standalone_rs274_too() {
-    if !common::tool::linuxcnc_interpreter_here() {
+    if !cell_testkit::linuxcnc_interpreter_here() {
         return;
     }
     for (name, tp) in common::dialect_samples() {

@@ -86,110 +86,18 @@ pub fn toolpath(job: &str) -> cell_msgs::Toolpath {
     tp
 }
 
-/// Whether a test may run, given whether the outside tool it needs is here (`found`). When it
-/// is not: under CI (`CI` set, not empty, `0` or `false`) the test fails; elsewhere this prints
-/// one `skipped:` line naming the test, the tool and how to install it (straight to stderr, past
-/// the test harness's capture; `scripts/test` repeats these lines before its totals) and returns
-/// `false`, and the caller returns early. The same rule as the workspace's `tests/common`.
-pub fn require_tool(tool: &str, found: Result<(), String>, how_to_install: &str) -> bool {
-    use std::io::Write;
-    let Err(why) = found else { return true };
-    let ci = std::env::var("CI").is_ok_and(|v| !matches!(v.as_str(), "" | "0" | "false"));
-    assert!(
-        !ci,
-        "needs {tool}: {why}; CI must have it: {how_to_install}"
-    );
-    let thread = std::thread::current();
-    let test = thread.name().filter(|n| *n != "main").unwrap_or("a test");
-    // One write, so the line stays whole among the harness's own output.
-    let line = format!("skipped: {test}: needs {tool}: {why}; install: {how_to_install}\n");
-    let _ = std::io::stderr().write_all(line.as_bytes());
-    false
-}
-
-/// Which Python runs the checker: `CELL_TEST_PYTHON` if set, else a venv under the target
-/// directory filled from `tests/py/requirements.txt` on first use. `None` when the venv cannot
-/// be made (no Python 3 with venv, no PyPI), after [`require_tool`] said so (or failed the test
-/// under CI). Made once per test binary: later calls get the first one's outcome.
+/// Which Python runs the checker: `CELL_TEST_PYTHON` if set, else the venv
+/// `CARGO_TARGET_TMPDIR/bag-venv` filled from `tests/py/requirements.txt` on first use
+/// ([`cell_testkit::venv_python`]). `None` (the check is skipped, or fails under CI) when it
+/// cannot be made.
 pub fn python() -> Option<String> {
-    use std::sync::Mutex;
-    static MADE: Mutex<Option<Result<(), String>>> = Mutex::new(None);
-    if let Ok(python) = std::env::var("CELL_TEST_PYTHON") {
-        return Some(python);
-    }
-    let made = MADE
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .get_or_insert_with(make_venv)
-        .clone();
-    require_tool(
-        "the PyPI packages of crates/bag/tests/py/requirements.txt",
-        made,
-        "Python 3 with venv (`scripts/test` installs python3-venv) and access to PyPI",
+    cell_testkit::venv_python(
+        Path::new(env!("CARGO_TARGET_TMPDIR")),
+        "bag-venv",
+        &py_dir().join("requirements.txt"),
+        "mcap_ros2.decoder, rosbags.highlevel",
     )
-    .then(|| venv_dir().join("bin/python").display().to_string())
-}
-
-fn venv_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bag-venv")
-}
-
-/// Creates (or completes) the venv of [`python`]: `Err` when Python, venv or pip fails.
-fn make_venv() -> Result<(), String> {
-    let venv = venv_dir();
-    let python = venv.join("bin/python");
-    let requirements = py_dir().join("requirements.txt");
-    let stamp = venv.join("requirements.installed");
-    let wanted = std::fs::read_to_string(&requirements).expect("requirements.txt");
-    let ready = |python: &Path| {
-        std::fs::read_to_string(&stamp).is_ok_and(|s| s == wanted)
-            && std::process::Command::new(python)
-                .args(["-c", "import mcap_ros2.decoder, rosbags.highlevel"])
-                .status()
-                .is_ok_and(|s| s.success())
-    };
-    if ready(&python) {
-        return Ok(());
-    }
-    let run = |cmd: &mut std::process::Command| {
-        let program = cmd.get_program().to_string_lossy().into_owned();
-        let out = cmd.output().map_err(|e| format!("{program}: {e}"))?;
-        if out.status.success() {
-            return Ok(());
-        }
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        let last = stderr.lines().rfind(|l| !l.trim().is_empty()).unwrap_or("");
-        let args: Vec<_> = cmd
-            .get_args()
-            .take(3)
-            .map(|a| a.to_string_lossy())
-            .collect();
-        Err(format!(
-            "`{program} {}` failed: {}",
-            args.join(" "),
-            last.trim()
-        ))
-    };
-    run(std::process::Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv))?;
-    run(std::process::Command::new(&python)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "-r",
-        ])
-        .arg(&requirements))?;
-    std::fs::write(&stamp, &wanted).expect("stamp");
-    assert!(
-        ready(&python),
-        "{} cannot import the bag readers",
-        python.display()
-    );
-    Ok(())
+    .map(|p| p.display().to_string())
 }
 
 pub fn py_dir() -> PathBuf {

@@ -5,8 +5,6 @@
 use cell_msgs::geometry_msgs::Point;
 use cell_msgs::{Toolpath, ToolpathSegment};
 
-pub mod tool;
-
 /// A segment of `kind` through `points` (x, y, z) at one feed and power.
 pub fn segment(kind: u8, points: &[[f64; 3]], feed_mm_s: f32, power: f32) -> ToolpathSegment {
     ToolpathSegment {
