@@ -53,6 +53,6 @@ pub use inside::{
 };
 pub use point::{AsPoint2, Norm, Point2, Point3};
 pub use polyline::{
-    closed_from_arc_length, cumulative_lengths, point_at_arc_length, polyline_length,
-    resample_max_step, ring_perimeter, sample_at_arc_fractions,
+    closed_from_arc_length, cumulative_lengths, distance3, point_at_arc_length, polyline_length,
+    polyline_length3, resample_max_step, ring_perimeter, sample_at_arc_fractions,
 };

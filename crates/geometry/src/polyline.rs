@@ -1,6 +1,6 @@
 //! Polyline and ring lengths, and resampling by step or by arc length.
 
-use crate::point::{AsPoint2, Norm, Point2};
+use crate::point::{AsPoint2, Norm, Point2, Point3};
 
 /// Length of the open polyline, Σᵢ ‖pᵢ₊₁ − pᵢ‖ (no closing edge), summed in order, each edge
 /// rounded by `norm`.
@@ -8,6 +8,18 @@ use crate::point::{AsPoint2, Norm, Point2};
 /// Degenerate cases: no point or one point give 0; zero-length edges (repeated points) add 0.
 pub fn polyline_length<P: AsPoint2>(points: &[P], norm: Norm) -> f64 {
     points.windows(2).map(|w| norm.distance(w[0], w[1])).sum()
+}
+
+/// Distance ‖b − a‖ between two points in space: √(dx² + dy² + dz²), the squares summed in
+/// x, y, z order (nalgebra's `distance`). Degenerate case: equal points give 0.
+pub fn distance3(a: impl Into<Point3>, b: impl Into<Point3>) -> f64 {
+    nalgebra::distance(&a.into(), &b.into())
+}
+
+/// Length of the open polyline in space, Σᵢ ‖pᵢ₊₁ − pᵢ‖ ([`distance3`] per edge, summed in
+/// order). Degenerate cases: no point or one point give 0; repeated points add 0.
+pub fn polyline_length3<P: Copy + Into<Point3>>(points: &[P]) -> f64 {
+    points.windows(2).map(|w| distance3(w[0], w[1])).sum()
 }
 
 /// Perimeter of the ring, Σᵢ ‖pᵢ₊₁ − pᵢ‖ with the closing edge pₙ₋₁ → p₀ included, summed in
@@ -213,6 +225,22 @@ pub fn closed_from_arc_length<P: AsPoint2 + From<Point2>>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn space_lengths_and_their_degenerate_cases() {
+        assert_eq!(distance3([1.0, 2.0, 3.0], [1.0, 2.0, 3.0]), 0.0);
+        assert_eq!(distance3([0.0, 0.0, 0.0], [2.0, 3.0, 6.0]), 7.0);
+        assert_eq!(distance3([2.0, 3.0, 6.0], [0.0, 0.0, 0.0]), 7.0);
+        assert_eq!(polyline_length3::<[f64; 3]>(&[]), 0.0);
+        assert_eq!(polyline_length3(&[[5.0, 5.0, 5.0]]), 0.0);
+        let path = [
+            [0.0, 0.0, 0.0],
+            [2.0, 3.0, 6.0],
+            [2.0, 3.0, 6.0],
+            [2.0, 3.0, 7.5],
+        ];
+        assert_eq!(polyline_length3(&path), 8.5);
+    }
 
     #[test]
     fn lengths_of_polylines_and_rings() {

@@ -12,6 +12,7 @@
 //!
 //! Pure: no ROS, no I/O.
 
+use cell_geometry::Norm;
 use cell_msgs::{
     builtin_interfaces::Time, geometry_msgs, std_msgs::Header, CutPlan as CutPlanMsg, Toolpath,
     ToolpathSegment,
@@ -167,7 +168,7 @@ pub fn travel_length_mm(toolpath: &Toolpath) -> f64 {
         .iter()
         .filter(|s| s.kind == ToolpathSegment::KIND_TRAVEL)
         .flat_map(|s| s.points.windows(2))
-        .map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y))
+        .map(|w| Norm::Hypot.distance([w[0].x, w[0].y], [w[1].x, w[1].y]))
         .sum()
 }
 

@@ -1,6 +1,6 @@
 //! Mass and build-time estimates (seed 002 §5 "Estimators", compared against Table 4).
 
-use crate::layers::{dist, Layer, Move, MoveKind};
+use crate::layers::{Layer, Move, MoveKind};
 
 /// Deposited volume Σ w·h·L over every stroke \[mm³\].
 pub fn deposited_volume_mm3(layers: &[Layer], extrusion_width_mm: f64) -> f64 {
@@ -41,7 +41,7 @@ pub fn build_time_s(moves: &[Move], accel: Option<Acceleration>) -> f64 {
     // The current run of head moves: (length, feed, unit direction).
     let mut run: Vec<(f64, f64, [f64; 3])> = Vec::new();
     for m in moves {
-        let l = dist(prev, m.to);
+        let l = cell_geometry::distance3(prev, m.to);
         let de = (m.e_mm - prev_e).abs();
         let e_only = matches!(m.kind, MoveKind::Retract | MoveKind::Prime) && l == 0.0;
         if e_only {

@@ -73,7 +73,7 @@ pub struct Stroke {
 impl Stroke {
     /// Polyline length \[mm\].
     pub fn length_mm(&self) -> f64 {
-        self.points.windows(2).map(|w| dist(w[0], w[1])).sum()
+        cell_geometry::polyline_length3(&self.points)
     }
 }
 
@@ -343,7 +343,8 @@ pub fn moves(layers: &[Layer], p: &BuildParams) -> Vec<Move> {
                 });
             }
             for w in s.points.windows(2) {
-                e += p.extrusion_width_mm * layer.height_mm * dist(w[0], w[1]) / area;
+                e += p.extrusion_width_mm * layer.height_mm * cell_geometry::distance3(w[0], w[1])
+                    / area;
                 out.push(Move {
                     kind: MoveKind::Deposit(s.role),
                     to: w[1],
@@ -354,10 +355,6 @@ pub fn moves(layers: &[Layer], p: &BuildParams) -> Vec<Move> {
         }
     }
     out
-}
-
-pub(crate) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
 }
 
 #[cfg(test)]

@@ -2,6 +2,7 @@
 //! advancing with the tool, the overheat metric and the maximum temperature. The spread step
 //! itself is the raster kernel's (`kernel`).
 
+use cell_geometry::{polyline_length, Norm};
 use serde::{Deserialize, Serialize};
 
 use crate::problem::{distance, Contour, Point};
@@ -318,7 +319,7 @@ impl<'a> ThermalSim<'a> {
             segment_overheats: 0,
         };
         let seg = self.params.segment_mm;
-        let total: f64 = path.windows(2).map(|w| distance(w[0], w[1])).sum();
+        let total = polyline_length(&path, Norm::Hypot);
         let mut s = seg;
         while s < total {
             if self.hot_near_c(point_along(&path, s)) >= t_max {
