@@ -1,6 +1,6 @@
-//! `cell_probe`: publishes a known `Toolpath` and a stream of `HeatMap` frames, so an
-//! integrator can check a cell's wiring end to end (DDS discovery across hosts, QoS, remapping,
-//! the shared-memory fast path, Rerun) before any real job runs.
+//! `probe` (on the ROS graph `cell_probe`): publishes a known `Toolpath` and a stream of
+//! `HeatMap` frames, so an integrator can check a cell's wiring end to end (DDS discovery across
+//! hosts, QoS, remapping, the shared-memory fast path, Rerun) before any real job runs.
 //!
 //! The toolpath is a tapered test block for a 4-axis hot-wire cutter: lead-in, a rectangle cut
 //! with both wire ends (root plane and a smaller tip plane), lead-out and a travel home. The heat

@@ -13,7 +13,7 @@
 //! read or is broken) ends as aborted with `success = false` and a message naming the file,
 //! entity or field; the node keeps serving. Goals run one at a time, in arrival order. A cancel
 //! request for the running goal is accepted: the improvement phase stops at its next iteration
-//! (`improve_until`), the best plan so far is simulated as usual and the goal ends as canceled,
+//! (its `stop` check), the best plan so far is simulated as usual and the goal ends as canceled,
 //! its result carrying that plan (`success = false`); nothing is published for the emitter.
 //! Cancel requests for other goals are refused.
 //!
