@@ -303,7 +303,7 @@ where
         .map_err(|_| anyhow!("{what}: no answer to the goal within {timeout:?}"))?
         .map_err(|e| anyhow!("{what}: goal not sent: {e:?}"))?;
     if !response.accepted {
-        bail!("{what}: the goal was rejected");
+        bail!("{what}: the goal was rejected (ROS 2 rejections carry no reason: the serving node logs it)");
     }
     let feedback = client.feedback_stream(goal_id);
     let mut feedback = std::pin::pin!(feedback);
