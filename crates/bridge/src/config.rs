@@ -16,6 +16,7 @@
 //! status_period_s: 0.1              # `?` poll and MachineStatus period (GRBL: at most 5 Hz advised)
 //! on_fault: safe_stop               # or hold: leave the machine in feed hold
 //! resume_after_link_drop: operator  # or auto: reconnect and go on from the last acked line + 1
+//! allowed_commands: ["$H"]          # controller commands a program may carry; others are refused
 //! ```
 //!
 //! An ABB robot is a [`cell_rws::ControllerConfig`] file with `protocol: rws`; its credentials
@@ -353,6 +354,11 @@ pub struct GrblControllerConfig {
     /// Reconnection.
     #[serde(default)]
     pub reconnect: ReconnectConfig,
+    /// Controller commands (`$…`, `[ESP…]`) a program may carry, each a whole line, e.g. `$H`
+    /// for homing at the start. None by default: a program line such as `$N0=M3S1000` or
+    /// `$RST=*` is refused, naming the file, line and text, before anything is sent.
+    #[serde(default)]
+    pub allowed_commands: Vec<String>,
 }
 
 fn default_axes() -> String {
@@ -381,6 +387,16 @@ impl GrblControllerConfig {
         };
         if self.id.trim().is_empty() {
             return Err(invalid("id", "empty".into()));
+        }
+        if let Some(bad) = self
+            .allowed_commands
+            .iter()
+            .find(|c| !cell_grbl::program::is_controller_command(c.trim()))
+        {
+            return Err(invalid(
+                "allowed_commands",
+                format!("{bad:?} is not a controller command (`$…` or `[ESP…]`)").into(),
+            ));
         }
         let axes: Vec<char> = self.axes.chars().collect();
         if axes.is_empty()

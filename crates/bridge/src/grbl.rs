@@ -158,8 +158,12 @@ impl GrblController {
             return Err(why);
         }
         let file = &program.files[0];
-        let parsed = Program::parse(&file.text, CleanOptions::default())
-            .map_err(|e| format!("{}: {e}", file.name))?;
+        let options = CleanOptions {
+            allowed_commands: self.cfg.allowed_commands.clone(),
+            ..CleanOptions::default()
+        };
+        let parsed =
+            Program::parse(&file.text, options).map_err(|e| format!("{}: {e}", file.name))?;
         let Some(first) = parsed.lines().first().map(|l| l.number) else {
             return Err(format!("{}: no G-code line in the program", file.name));
         };

@@ -88,3 +88,51 @@ async fn a_program_a_controller_cannot_take_is_named_before_anything_is_sent() {
     );
     assert!(sim.executed_lines().is_empty(), "nothing was sent");
 }
+
+/// A program line that is a controller command (`$RST=*` wipes GRBL's settings, `$N0=…` stores
+/// a start-up block) is refused before anything is sent, naming the file, line and text; a
+/// command the controller file allows (`$H`) passes, and the file's list holds only controller
+/// commands.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn controller_commands_in_a_program_are_refused_before_anything_is_sent() {
+    let (sim, c, _dir) = grbl(Faults::default(), "").await;
+    let mut program = emitted("grbl-xyuv", "wing", "wing");
+    let mut lines: Vec<&str> = program.files[0].text.lines().collect();
+    lines.insert(3, "$RST=*");
+    program.files[0].text = lines.join("\n");
+    let why = c.check_program(&program, 0).unwrap_err();
+    let file = &program.files[0].name;
+    assert!(
+        why.starts_with(&format!("{file}: line 4: `$RST=*` is a controller command")),
+        "{why}"
+    );
+    let out = c.execute(&program, 0).await;
+    assert!(
+        !out.success && out.message.contains("`$RST=*`"),
+        "{}",
+        out.message
+    );
+    assert!(sim.executed_lines().is_empty(), "nothing was sent");
+
+    let (_sim, homing, _dir) = grbl(Faults::default(), "allowed_commands: ['$H']\n").await;
+    let mut homed = emitted("grbl-xyuv", "wing", "wing");
+    homed.files[0].text = format!("$H\n{}", homed.files[0].text);
+    assert_eq!(homing.check_program(&homed, 0), Ok(()));
+    let mut startup = homed.clone();
+    startup.files[0].text = format!("$N0=M3S1000\n{}", startup.files[0].text);
+    let why = homing.check_program(&startup, 0).unwrap_err();
+    assert!(why.contains("line 1: `$N0=M3S1000`"), "{why}");
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.yaml");
+    std::fs::write(
+        &path,
+        "id: c\nprotocol: grbl\nendpoint: {tcp: '127.0.0.1:1'}\nallowed_commands: [G28]\n",
+    )
+    .unwrap();
+    let err = ControllerSpec::load(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("bad.yaml") && err.contains("allowed_commands") && err.contains("\"G28\""),
+        "{err}"
+    );
+}

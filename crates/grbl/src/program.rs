@@ -21,11 +21,15 @@ impl ProgramLine {
 }
 
 /// How a program's text is cleaned before streaming.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct CleanOptions {
     /// Remove every space and tab inside a line too (GRBL ignores them; fewer bytes to send).
     /// Off by default, so the sent text stays readable in logs.
     pub strip_whitespace: bool,
+    /// Controller commands a program may carry after all, each a whole line as written
+    /// (compared without spaces and case, as GRBL reads them), e.g. `$H` for homing. Every
+    /// other controller command is refused ([`ProgramError::ControllerCommand`]).
+    pub allowed_commands: Vec<String>,
 }
 
 /// Why a program cannot be streamed; every variant names the original line.
@@ -60,6 +64,15 @@ pub enum ProgramError {
         /// The limit, 127.
         max: usize,
     },
+    /// The line is a command to the controller itself (a GRBL `$` system command or a FluidNC
+    /// `[ESP…]` command), not G-code, and the controller file does not allow it.
+    #[error("line {line}: `{text}` is a controller command, not G-code (the controller would execute it); allow it in the controller file's `allowed_commands` if it is meant")]
+    ControllerCommand {
+        /// Original line number.
+        line: usize,
+        /// The line as written, comments removed.
+        text: String,
+    },
     /// The line holds a byte GRBL would take as a real-time command (`?`, `!`, `~`, 0x18,
     /// bytes from 0x80) or another control character, or is not ASCII.
     #[error("line {line}: contains byte 0x{byte:02x}, which GRBL would act on as a real-time command or cannot take")]
@@ -69,6 +82,26 @@ pub enum ProgramError {
         /// The offending byte.
         byte: u8,
     },
+}
+
+/// Whether a cleaned line is a command to the controller itself rather than G-code: GRBL's
+/// `$` system commands (`$H`, `$X`, `$RST=*`, `$N0=…`, `$J=…`, settings `$32=1`) and
+/// FluidNC's `[ESP…]` commands. Streamed as program lines, the controller would execute them:
+/// `$N0=M3S1000` stores a start-up block that switches the heat on at every reset, `$RST=*`
+/// wipes the settings.
+pub fn is_controller_command(line: &str) -> bool {
+    line.starts_with('$')
+        || line
+            .get(..4)
+            .is_some_and(|head| head.eq_ignore_ascii_case("[ESP"))
+}
+
+/// A line as GRBL compares it: no spaces or tabs, letters in upper case.
+fn normalised(line: &str) -> String {
+    line.chars()
+        .filter(|c| !c.is_whitespace())
+        .map(|c| c.to_ascii_uppercase())
+        .collect()
 }
 
 /// A cleaned program: the lines to send, in order.
@@ -118,6 +151,17 @@ impl Program {
             }
             if t.is_empty() || t == "%" {
                 continue;
+            }
+            if is_controller_command(&t)
+                && !options
+                    .allowed_commands
+                    .iter()
+                    .any(|allowed| normalised(allowed) == normalised(&t))
+            {
+                return Err(ProgramError::ControllerCommand {
+                    line: number,
+                    text: t,
+                });
             }
             for b in t.bytes() {
                 let forbidden = Realtime::from_byte(b).is_some()
@@ -203,6 +247,49 @@ mod tests {
     use super::*;
 
     #[test]
+    fn controller_commands_are_refused_unless_allowed() {
+        for (text, line, command) in [
+            ("G21\n$N0=M3S1000\nG1 X1 F100\n", 2, "$N0=M3S1000"),
+            ("G21\n(wipe) $RST=*\n", 2, "$RST=*"),
+            ("$h\n", 1, "$h"),
+            ("G90\n\n $32 = 1 ; laser mode\n", 3, "$32 = 1"),
+            ("[ESP800]\n", 1, "[ESP800]"),
+            ("[esp444]RESTART\n", 1, "[esp444]RESTART"),
+        ] {
+            let err = Program::parse(text, CleanOptions::default()).unwrap_err();
+            assert_eq!(
+                err,
+                ProgramError::ControllerCommand {
+                    line,
+                    text: command.into()
+                },
+                "{text:?}"
+            );
+            assert!(
+                err.to_string()
+                    .starts_with(&format!("line {line}: `{command}`")),
+                "{err}"
+            );
+        }
+        let homing = CleanOptions {
+            allowed_commands: vec!["$H".into()],
+            ..CleanOptions::default()
+        };
+        let p = Program::parse("$H\n$ h\nG1 X1 F100\n", homing.clone()).unwrap();
+        assert_eq!(
+            p.len(),
+            3,
+            "the allowed command, in any case and spacing, is kept"
+        );
+        assert!(matches!(
+            Program::parse("$H\n$X\n", homing),
+            Err(ProgramError::ControllerCommand { line: 2, .. })
+        ));
+        // G-code that merely contains `$` or brackets elsewhere is not a controller command.
+        assert!(Program::parse("G1 X[1+2] F100\n", CleanOptions::default()).is_ok());
+    }
+
+    #[test]
     fn comments_and_blank_lines_go_and_line_numbers_stay() {
         let text = "(header)\nG21 G90 ; metric\n\n  G1 X1 (move) Y2 F100  \n%\n;only\nM2\n";
         let p = Program::parse(text, CleanOptions::default()).unwrap();
@@ -223,6 +310,7 @@ mod tests {
             text,
             CleanOptions {
                 strip_whitespace: true,
+                ..CleanOptions::default()
             },
         )
         .unwrap();
