@@ -466,6 +466,23 @@ impl GrblControllerConfig {
             }
             _ => {}
         }
+        // A board on a serial line (or a pty standing in for one) resets when the port is
+        // opened again: its planner, modal state and position are gone, so going on from the
+        // last acknowledged line would run the rest of the program from the wrong state.
+        if self.resume_after_link_drop == ResumePolicy::Auto
+            && matches!(
+                self.endpoint,
+                EndpointConfig::Serial { .. } | EndpointConfig::Pty(_)
+            )
+        {
+            return Err(invalid(
+                "resume_after_link_drop",
+                "`auto` needs a controller that keeps its state over a reconnect (TCP, e.g. \
+                 FluidNC, or the simulator); a serial or pty board resets when its port is \
+                 opened: use `operator`"
+                    .into(),
+            ));
+        }
         Ok(())
     }
 
@@ -569,6 +586,28 @@ mod tests {
         assert_eq!(c.flow, FlowControl::CharacterCounting);
         assert_eq!(c.status_period, Duration::from_millis(100));
         assert_eq!(g.resume_after_link_drop, ResumePolicy::Operator);
+    }
+
+    #[test]
+    fn auto_resume_is_refused_for_boards_that_reset_when_their_port_opens() {
+        let load = |endpoint: &str, policy: &str| {
+            let text = format!(
+                "id: a\nprotocol: grbl\nendpoint: {endpoint}\nresume_after_link_drop: {policy}\n"
+            );
+            ControllerSpec::from_yaml_str(&text, "c.yaml", None).map_err(|e| e.to_string())
+        };
+        for endpoint in ["{serial: {path: /dev/ttyUSB0}}", "{pty: /dev/pts/7}"] {
+            let e = load(endpoint, "auto").unwrap_err();
+            assert!(
+                e.contains("c.yaml")
+                    && e.contains("resume_after_link_drop")
+                    && e.contains("`operator`"),
+                "{endpoint}: {e}"
+            );
+            assert!(load(endpoint, "operator").is_ok(), "{endpoint}");
+        }
+        assert!(load("{tcp: '192.168.4.1:23'}", "auto").is_ok());
+        assert!(load("{simulator: {time_scale: 10}}", "auto").is_ok());
     }
 
     #[test]
