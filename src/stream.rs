@@ -4,7 +4,9 @@
 //! `--controller` is an id under `config/controllers` (`grbl-sim` starts the in-repo simulator)
 //! or a controller YAML file. `--program` is one G-code file (`.ngc`, `.nc`, `.gcode`, …) or,
 //! for an ABB controller, the RAPID modules and the `.pgf` the emitter wrote. A progress bar
-//! follows the acknowledged lines; Ctrl-C aborts with a safe stop (hold, reset, heat off).
+//! follows the acknowledged lines; Ctrl-C (SIGINT) or SIGTERM aborts with a safe stop (hold,
+//! reset, heat off) and the command exits only once the controller has reported the heat off,
+//! or the message says why that could not be confirmed.
 //!
 //! Exit status: 0 the program ran to its end; 1 it stopped (alarm, rejected line, link lost,
 //! aborted; the message names the line and, after a drop, the `--start-line` to resume from);
@@ -126,6 +128,7 @@ async fn stream(spec: ControllerSpec, program: MachineProgram, args: &StreamArgs
     tokio::pin!(run);
     let mut tick = tokio::time::interval(Duration::from_millis(100));
     let mut aborting = false;
+    let mut stop_signal = std::pin::pin!(stop_signal());
     let outcome = loop {
         tokio::select! {
             outcome = &mut run => break outcome,
@@ -134,9 +137,9 @@ async fn stream(spec: ControllerSpec, program: MachineProgram, args: &StreamArgs
                 bar.set_position(controller.percent_done().round() as u64);
                 bar.set_message(format!("{}/{}", s.acked_line, s.total_lines));
             }
-            _ = tokio::signal::ctrl_c(), if !aborting => {
+            name = &mut stop_signal, if !aborting => {
                 aborting = true;
-                bar.println("Ctrl-C: aborting (hold, reset, heat off)");
+                bar.println(format!("{name}: aborting (hold, reset, heat off)"));
                 let abort = MachineCommand { machine_id: controller.id().into(), command: MachineCommand::COMMAND_ABORT, value: 0 };
                 match controller.command(&abort).await {
                     Ok(m) | Err(m) => bar.println(m),
@@ -162,6 +165,21 @@ async fn stream(spec: ControllerSpec, program: MachineProgram, args: &StreamArgs
         ));
     }
     exit(code, message)
+}
+
+/// The first SIGINT (Ctrl-C) or SIGTERM; its name.
+async fn stop_signal() -> &'static str {
+    use tokio::signal::unix::{signal, SignalKind};
+    match signal(SignalKind::terminate()) {
+        Ok(mut term) => tokio::select! {
+            _ = tokio::signal::ctrl_c() => "Ctrl-C",
+            _ = term.recv() => "SIGTERM",
+        },
+        Err(_) => {
+            let _ = tokio::signal::ctrl_c().await;
+            "Ctrl-C"
+        }
+    }
 }
 
 #[cfg(test)]

@@ -442,29 +442,40 @@ async fn after_a_drop_the_operator_resumes_from_the_reported_line() {
     assert_eq!(lost.outcome, R::OUTCOME_LINK_LOST, "{}", lost.message);
     let acked = lost.last_acked_line as usize;
     assert!(acked > 0);
-    let next = sent.lines()[sent.index_of_line(acked).unwrap() + 1].number;
+    // The first thing on the new link was the safe stop, and the controller reported the
+    // heat off; the moves its reset discarded are not lost: `line` is where to resume.
     assert!(
-        lost.message.contains(&format!("start_line {}", acked + 1)),
+        lost.message.contains("heat off confirmed"),
         "{}",
         lost.message
     );
-    // The bridge reconnects by itself; the machine finishes what its planner held.
+    let next = lost.line as usize;
+    assert!(next > 0 && next <= acked + 1, "{}", lost.message);
+    assert!(
+        lost.message.contains(&format!("start_line {next}")),
+        "{}",
+        lost.message
+    );
     status_until(&mut op.status, "serial-like", |s| {
         s.state == MachineStatus::STATE_IDLE
     })
     .await;
-    sim.wait_for(Duration::from_secs(60), |s| {
-        s.state == MachineState::Idle && s.planner_used == 0
-    })
-    .await
-    .expect("planner drains");
+    let stopped = sim
+        .wait_for(Duration::from_secs(60), |s| {
+            s.state == MachineState::Idle && s.planner_used == 0
+        })
+        .await
+        .expect("the machine is stopped");
+    assert!(!stopped.spindle_on, "the heat is off after the drop");
     let executed = sim.executed_lines();
-    let acked_index = sent.index_of_line(acked).unwrap();
+    let next_index = sent.index_of_line(next).unwrap();
+    let all = texts(&sent);
     assert_eq!(
-        executed,
-        texts(&sent)[..=acked_index],
-        "the machine ran up to the acknowledged line"
+        executed[..executed.len() - 1],
+        all[..next_index],
+        "the machine ran every line before the resume line, and no other"
     );
+    assert_eq!(executed.last().map(String::as_str), Some("M5"), "then the safe stop's M5");
 
     let (resumed, _) = execute(
         &op.client,
@@ -476,11 +487,16 @@ async fn after_a_drop_the_operator_resumes_from_the_reported_line() {
     )
     .await;
     assert!(resumed.success, "{}", resumed.message);
-    assert_eq!(
-        sim.executed_lines(),
-        texts(&sent),
-        "no line lost, none repeated"
+    let executed = sim.executed_lines();
+    assert_eq!(executed[..next_index], all[..next_index]);
+    assert!(
+        executed.ends_with(&all[next_index..]),
+        "no line lost, none repeated: the resumed run ends with the rest of the program"
     );
+    // Between the two runs: the safe stop's M5, then what the resume sent to restore the
+    // program's state at the resume line (never a program line twice).
+    let between = &executed[next_index..executed.len() - (all.len() - next_index)];
+    assert_eq!(between.first().map(String::as_str), Some("M5"), "{between:?}");
     bridge.abort();
 }
 

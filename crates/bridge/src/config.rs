@@ -339,6 +339,14 @@ pub struct GrblControllerConfig {
     /// The controller's serial RX buffer (GRBL 1.1 on an AVR: 128; grblHAL often 1024).
     #[serde(default = "default_rx")]
     pub rx_buffer_bytes: usize,
+    /// Ask the controller (`$I`) for its RX buffer on every connect and use what it says
+    /// (grblHAL, FluidNC); `rx_buffer_bytes` stays the fallback.
+    #[serde(default)]
+    pub detect_rx_buffer: bool,
+    /// Longest wait for the answer to a command (`M5`, `$G`, `$X`) and for a connection
+    /// attempt (s), 0.5..120.
+    #[serde(default = "default_command_timeout")]
+    pub command_timeout_s: f64,
     /// Status poll and `MachineStatus` period (s).
     #[serde(default = "default_status_period")]
     pub status_period_s: f64,
@@ -367,6 +375,10 @@ fn default_axes() -> String {
 
 fn default_rx() -> usize {
     cell_grbl::protocol::RX_BUFFER_SIZE
+}
+
+fn default_command_timeout() -> f64 {
+    10.0
 }
 
 fn default_status_period() -> f64 {
@@ -428,6 +440,12 @@ impl GrblControllerConfig {
             self.rx_buffer_bytes as f64,
             Allowed::closed(16.0, 65_536.0).whole(),
             "bytes",
+        )?;
+        in_range(
+            "command_timeout_s",
+            self.command_timeout_s,
+            Allowed::closed(0.5, 120.0),
+            "s",
         )?;
         // GRBL advises at most 5 Hz of `?`; faster than 50 Hz only loads the link.
         in_range(
@@ -510,6 +528,8 @@ impl GrblControllerConfig {
             reconnect_delay: Duration::from_secs_f64(self.reconnect.delay_s),
             // A controller silent for ten polls (at least 2 s) is gone, though its link is up.
             status_timeout: (period * 10).max(Duration::from_secs(2)),
+            command_timeout: Duration::from_secs_f64(self.command_timeout_s),
+            detect_rx_buffer: self.detect_rx_buffer,
             ..ClientConfig::default()
         }
     }

@@ -181,6 +181,37 @@ impl Controller {
         }
     }
 
+    /// Brings the machine to a safe state within about `budget` before the process exits
+    /// (SIGINT, SIGTERM): see [`GrblController::stop_for_shutdown`]; an ABB robot that runs or
+    /// holds gets the abort (stop with heat off). One line for the log.
+    pub async fn stop_for_shutdown(&self, budget: Duration) -> String {
+        match self {
+            Controller::Grbl(g) => g.stop_for_shutdown(budget).await,
+            Controller::Rws(r) => {
+                let state = r.status().state;
+                if !matches!(
+                    state,
+                    MachineStatus::STATE_RUNNING | MachineStatus::STATE_HOLD
+                ) {
+                    return format!("{}: not running", r.config().id);
+                }
+                let abort = MachineCommand {
+                    machine_id: r.config().id.clone(),
+                    command: MachineCommand::COMMAND_ABORT,
+                    value: 0,
+                };
+                let _ = r.command(&abort).await;
+                let deadline = tokio::time::Instant::now() + budget;
+                while r.status().state == MachineStatus::STATE_RUNNING
+                    && tokio::time::Instant::now() < deadline
+                {
+                    tokio::time::sleep(Duration::from_millis(20)).await;
+                }
+                format!("{}: abort sent; state {}", r.config().id, r.status().state)
+            }
+        }
+    }
+
     /// The state now (header left for the node to stamp).
     pub fn status(&self) -> MachineStatus {
         match self {

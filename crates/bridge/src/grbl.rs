@@ -9,7 +9,9 @@ use std::time::Duration;
 use cell_grbl::program::{CleanOptions, Program};
 use cell_grbl::protocol::{alarm_message, MachineState};
 use cell_grbl::sim::{SimConfig, SimHandle};
-use cell_grbl::stream::{Fault, GrblClient, JobReport, Progress, StreamError};
+use cell_grbl::stream::{
+    Fault, GrblClient, HeatState, JobReport, Progress, SafeStopReport, StreamError,
+};
 use cell_grbl::transport::Connect;
 use cell_msgs::{ExecuteProgramResult as R, MachineCommand, MachineProgram, MachineStatus};
 
@@ -31,6 +33,9 @@ pub struct GrblController {
     /// The last run's alarm or rejected line, for `MachineStatus.alarm` (a soft reset clears
     /// GRBL's own alarm code, not the reason the program stopped).
     last_fault: Mutex<Option<String>>,
+    /// Held while the link keeper checks what it found on a (re)connect, so a program does
+    /// not start in the middle of that check's safe stop.
+    found_check: tokio::sync::Mutex<()>,
 }
 
 impl std::fmt::Debug for GrblController {
@@ -77,6 +82,7 @@ impl GrblController {
             abort_requested: AtomicBool::new(false),
             link_error: Mutex::new(None),
             last_fault: Mutex::new(None),
+            found_check: tokio::sync::Mutex::new(()),
         });
         tokio::spawn(keep_connected(Arc::downgrade(&controller)));
         Ok(controller)
@@ -167,6 +173,23 @@ impl GrblController {
         let Some(first) = parsed.lines().first().map(|l| l.number) else {
             return Err(format!("{}: no G-code line in the program", file.name));
         };
+        // Character counting could never send a line longer than the RX buffer: the stream
+        // would stall on it, mid-program, heat on.
+        if self.cfg.flow == crate::config::FlowConfig::CharacterCounting {
+            let budget = self
+                .client()
+                .filter(|c| c.progress().borrow().connected)
+                .map_or(self.cfg.rx_buffer_bytes.saturating_sub(1), |c| c.rx_budget());
+            if let Some(l) = parsed.lines().iter().find(|l| l.wire_len() > budget) {
+                return Err(format!(
+                    "{}:{}: line is {} bytes on the wire; controller {} takes at most {budget} (its RX buffer less one): split it",
+                    file.name,
+                    l.number,
+                    l.wire_len(),
+                    self.cfg.id
+                ));
+            }
+        }
         let from = if start_line == 0 {
             first
         } else {
@@ -207,6 +230,9 @@ impl GrblController {
                 self.cfg.id
             ));
         }
+        // A check of what the link keeper found on connecting finishes first (it sees `busy`
+        // and skips once this run is registered).
+        drop(self.found_check.lock().await);
         self.abort_requested.store(false, Ordering::SeqCst);
         *lock(&self.job) = Some(JobInfo::new(
             program,
@@ -272,12 +298,28 @@ impl GrblController {
                     let acked_here = e.last_acked_line.filter(|&a| a >= from);
                     last_acked = acked_here.or(last_acked);
                     set_progress(last_acked);
-                    let resumable = matches!(e.fault, Fault::LinkLost(_))
+                    let link_lost = matches!(e.fault, Fault::LinkLost(_));
+                    let resumable = link_lost
                         && self.cfg.resume_after_link_drop == ResumePolicy::Auto
                         && reconnects < self.cfg.reconnect.max_resumes
                         && !self.abort_requested.load(Ordering::SeqCst);
+                    if link_lost && !resumable {
+                        // The controller may still be running what its planner held, heat on:
+                        // the first thing on the new link is the safe stop.
+                        tracing::warn!("{}: {e}; reconnecting to stop the machine", self.cfg.id);
+                        let stop = client.reconnect_and_stop().await;
+                        break self.failed(
+                            program,
+                            &StreamError {
+                                safe_stop: Some(Box::new(stop)),
+                                ..e
+                            },
+                            last_acked,
+                            reconnects,
+                        );
+                    }
                     if !resumable {
-                        break self.failed(&e, last_acked, reconnects);
+                        break self.failed(program, &e, last_acked, reconnects);
                     }
                     reconnects += 1;
                     tracing::warn!("{}: {e}; reconnecting (drop {reconnects})", self.cfg.id);
@@ -289,7 +331,7 @@ impl GrblController {
                                 || p.status.as_ref().and_then(|s| s.state)
                                     == Some(MachineState::Alarm) =>
                         {
-                            let mut out = self.failed(&e, last_acked, reconnects);
+                            let mut out = self.failed(program, &e, last_acked, reconnects);
                             out.message = format!(
                                 "{}; the controller is in alarm after reconnecting, so its planner may be lost: check the machine and resume from the line it stopped at",
                                 out.message
@@ -298,15 +340,18 @@ impl GrblController {
                         }
                         Ok(_) => {}
                         Err(re) => {
-                            let mut out = self.failed(&e, last_acked, reconnects);
+                            let mut out = self.failed(program, &e, last_acked, reconnects);
                             out.message = format!("{}; reconnect failed: {re}", out.message);
                             break out;
                         }
                     }
                     if self.abort_requested.load(Ordering::SeqCst) {
-                        break self.failed(
+                        // Aborted while the link was down: stop on the new link.
+                        let stop = client.safe_stop().await;
+                        break self.failed(program, 
                             &StreamError {
                                 fault: Fault::Aborted,
+                                safe_stop: Some(Box::new(stop)),
                                 ..e
                             },
                             last_acked,
@@ -365,37 +410,60 @@ impl GrblController {
         }
     }
 
-    fn failed(&self, e: &StreamError, last_acked: Option<usize>, reconnects: u32) -> RunOutcome {
+    fn failed(
+        &self,
+        program: &Program,
+        e: &StreamError,
+        last_acked: Option<usize>,
+        reconnects: u32,
+    ) -> RunOutcome {
         let acked = last_acked.unwrap_or(0) as u32;
         let (outcome, line) = match &e.fault {
             Fault::Rejected { line, .. } => (R::OUTCOME_REJECTED_LINE, *line as u32),
             Fault::Alarm { .. } | Fault::UnexpectedReset => (R::OUTCOME_ALARM, acked),
             Fault::LinkLost(_) | Fault::ClientGone => (R::OUTCOME_LINK_LOST, acked),
             Fault::Aborted => (R::OUTCOME_ABORTED, acked),
-            Fault::Busy | Fault::NoSuchLine(_) => (R::OUTCOME_REFUSED, acked),
+            Fault::Busy | Fault::NoSuchLine(_) | Fault::LineTooLong { .. } => {
+                (R::OUTCOME_REFUSED, acked)
+            }
         };
         let mut message = format!("{}: {e}", self.cfg.id);
-        if let Some(stop) = &e.safe_stop {
-            message.push_str(&format!("; safe stop sent {}", stop.sent.join(" ")));
-            if stop.heat_off_acked {
-                message.push_str(", heat off confirmed");
-            }
-            for p in &stop.problems {
+        match &e.safe_stop {
+            Some(stop) => {
                 message.push_str("; ");
-                message.push_str(p);
+                message.push_str(&stop.summary());
             }
+            // Nothing was sent, so nothing was switched on.
+            None if outcome == R::OUTCOME_REFUSED => {}
+            None => message.push_str("; no safe stop was run: heat state unknown"),
         }
+        let mut resume_at = None;
         if outcome == R::OUTCOME_LINK_LOST {
-            message.push_str(&format!(
-                "; resume with start_line {} once the machine is checked",
-                acked + 1
-            ));
+            let pending = e.safe_stop.as_ref().and_then(|s| s.pending_blocks);
+            let acked_index = last_acked.and_then(|a| program.index_of_line(a));
+            match (pending, acked_index) {
+                (Some(n), Some(i)) if n > 0 => {
+                    let texts: Vec<&str> = program.lines().iter().map(|l| l.text.as_str()).collect();
+                    let at = cell_grbl::resume_point::first_unfinished(&texts, i, n.into());
+                    resume_at = program.lines().get(at).map(|l| l.number as u32);
+                    message.push_str(&format!(
+                        "; the reset discarded {n} queued move{}: resume with start_line {} (the first move not finished; lines sent but not acknowledged may have run too: check the machine's position)",
+                        if n == 1 { "" } else { "s" },
+                        resume_at.unwrap_or(acked + 1)
+                    ));
+                }
+                _ => message.push_str(&format!(
+                    "; resume with start_line {} once the machine is checked",
+                    acked + 1
+                )),
+            }
         }
         RunOutcome {
             success: false,
             outcome,
             message,
-            line,
+            // After a link loss whose safe stop discarded queued moves: the line to resume from.
+            line: resume_at.unwrap_or(line),
             last_acked_line: acked,
             reconnects,
             final_state: MachineStatus::STATE_UNKNOWN,
@@ -404,10 +472,26 @@ impl GrblController {
 
     /// Acts on an operator command now: real-time bytes go out ahead of anything queued.
     pub async fn command(&self, command: &MachineCommand) -> Result<String, String> {
+        if command.command == MachineCommand::COMMAND_ABORT {
+            // Noted before anything else: a run waiting for its link to come back stops with
+            // a safe stop on the new link instead of resuming.
+            self.abort_requested.store(true, Ordering::SeqCst);
+        }
         let client = self
             .client()
             .filter(|c| c.progress().borrow().connected)
-            .ok_or_else(|| format!("{}: not connected", self.cfg.id))?;
+            .ok_or_else(|| {
+                if command.command == MachineCommand::COMMAND_ABORT
+                    && self.busy.load(Ordering::SeqCst)
+                {
+                    format!(
+                        "{}: abort: the link is down; the safe stop goes out first once it is back",
+                        self.cfg.id
+                    )
+                } else {
+                    format!("{}: not connected", self.cfg.id)
+                }
+            })?;
         let id = &self.cfg.id;
         let done = |what: &str| Ok(format!("{id}: {what}"));
         let r = match command.command {
@@ -417,15 +501,7 @@ impl GrblController {
                 self.abort_requested.store(true, Ordering::SeqCst);
                 return match client.abort().await {
                     Ok(None) => done("abort: feed hold sent; the program stops with a safe stop"),
-                    Ok(Some(report)) => done(&format!(
-                        "abort: safe stop sent {}{}",
-                        report.sent.join(" "),
-                        if report.heat_off_acked {
-                            ", heat off confirmed"
-                        } else {
-                            ""
-                        }
-                    )),
+                    Ok(Some(report)) => done(&format!("abort: {}", report.summary())),
                     Err(e) => Err(format!("{id}: abort: {e}")),
                 };
             }
@@ -448,6 +524,71 @@ impl GrblController {
         r.map_err(|e| format!("{id}: {e}")).and_then(done)
     }
 
+    /// Brings the machine to a safe state within about `budget` (the process is about to
+    /// exit): a running program is aborted (its safe stop runs), a machine left running, in
+    /// hold or with the heat on is safe-stopped, and the heat is read back from the
+    /// controller. Returns one line for the log.
+    pub async fn stop_for_shutdown(&self, budget: Duration) -> String {
+        let id = &self.cfg.id;
+        let deadline = tokio::time::Instant::now() + budget;
+        self.abort_requested.store(true, Ordering::SeqCst);
+        let Some(client) = self.client().filter(|c| c.progress().borrow().connected) else {
+            return if self.busy.load(Ordering::SeqCst) {
+                format!("{id}: the link is down: heat state unknown; check the machine")
+            } else {
+                format!("{id}: not connected")
+            };
+        };
+        if self.busy.load(Ordering::SeqCst) {
+            let _ = client.abort().await;
+            while self.busy.load(Ordering::SeqCst) && tokio::time::Instant::now() < deadline {
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+        }
+        let left = deadline.saturating_duration_since(tokio::time::Instant::now());
+        let heat = client.heat_state().await;
+        if heat.is_confirmed_off() && !machine_moving(&client) {
+            return format!("{id}: {heat}");
+        }
+        let stop = client.safe_stop_within(left).await;
+        format!("{id}: {}", stop.summary())
+    }
+
+    /// What the link keeper does on every (re)connect while no program of ours runs: a
+    /// controller found moving, in hold or with the heat on (a bridge that was killed, a
+    /// program someone else started) gets the safe stop before anything else.
+    async fn check_found_state(&self, client: &GrblClient) -> Option<SafeStopReport> {
+        let _checking = self.found_check.lock().await;
+        if self.busy.load(Ordering::SeqCst) {
+            return None;
+        }
+        let heat = client.heat_state().await;
+        let moving = machine_moving(client);
+        if !moving && !matches!(heat, HeatState::On { .. }) {
+            return None;
+        }
+        tracing::warn!(
+            "{}: found the machine {} with no program of ours running ({heat}): safe stop",
+            self.cfg.id,
+            client
+                .progress()
+                .borrow()
+                .status
+                .as_ref()
+                .and_then(|s| s.state)
+                .map_or("in an unknown state".to_string(), |s| format!("in {s:?}"))
+        );
+        let stop = client.safe_stop().await;
+        let line = format!("{}: {}", self.cfg.id, stop.summary());
+        if stop.heat.is_confirmed_off() {
+            tracing::warn!("{line}");
+        } else {
+            tracing::error!("{line}");
+        }
+        *lock(&self.last_fault) = Some(line);
+        Some(stop)
+    }
+
     fn state_now(&self) -> u8 {
         self.status().state
     }
@@ -463,6 +604,20 @@ impl GrblController {
         }
         s
     }
+}
+
+/// The controller reports motion or a paused motion (hold and door count: a `~` would go on).
+fn machine_moving(client: &GrblClient) -> bool {
+    matches!(
+        client.progress().borrow().status.as_ref().and_then(|s| s.state),
+        Some(
+            MachineState::Run
+                | MachineState::Jog
+                | MachineState::Hold(_)
+                | MachineState::Door(_)
+                | MachineState::Home
+        )
+    )
 }
 
 /// `MachineStatus` from the link task's progress and the current job.
@@ -543,18 +698,26 @@ async fn keep_connected(controller: std::sync::Weak<GrblController>) {
         let delay = Duration::from_secs_f64(c.cfg.reconnect.delay_s.max(0.05));
         let client = c.client();
         let result = match client {
-            None => GrblClient::connect(c.connector.clone(), c.cfg.client_config())
-                .await
-                .map(|client| {
+            None => match GrblClient::connect(c.connector.clone(), c.cfg.client_config()).await {
+                Ok(client) => {
                     tracing::info!("{}: connected ({})", c.cfg.id, c.connector.describe());
-                    *lock(&c.client) = Some(client);
-                }),
+                    *lock(&c.client) = Some(client.clone());
+                    c.check_found_state(&client).await;
+                    Ok(())
+                }
+                Err(e) => Err(e),
+            },
             Some(client)
                 if !client.progress().borrow().connected && !c.busy.load(Ordering::SeqCst) =>
             {
-                client.reconnect().await.map(|_| {
-                    tracing::info!("{}: reconnected", c.cfg.id);
-                })
+                match client.reconnect().await {
+                    Ok(_) => {
+                        tracing::info!("{}: reconnected", c.cfg.id);
+                        c.check_found_state(&client).await;
+                        Ok(())
+                    }
+                    Err(e) => Err(e),
+                }
             }
             Some(_) => Ok(()),
         };

@@ -2,16 +2,21 @@
 //! like the best senders (character counting or send-response, status polling, real-time
 //! commands, safe stop, resume after a link drop) and a GRBL 1.1 protocol simulator.
 //!
+//! - [`firmware`]: which firmware answers (GRBL, grblHAL, FluidNC banners), `$I` buffer sizes,
+//!   the spindle word of `$G`.
 //! - [`protocol`]: real-time bytes, response and status-report parsing, error/alarm tables.
 //! - [`program`]: a program cleaned for streaming, with original line numbers kept.
+//! - [`resume_point`]: the line to resume from after a safe stop flushed the planner.
 //! - [`transport`]: TCP, serial, pty behind one trait.
 //! - [`stream`]: the streaming client ([`stream::GrblClient`]).
 //! - [`sim`]: the simulator.
 
 #![warn(missing_docs)]
 
+pub mod firmware;
 pub mod program;
 pub mod protocol;
+pub mod resume_point;
 pub mod sim;
 pub mod stream;
 pub mod transport;

@@ -552,8 +552,9 @@ pub enum Response {
     Alarm(u8),
     /// `<...>` real-time status report.
     Status(StatusReport),
-    /// The welcome banner after a reset, `Grbl 1.1h ['$' for help]`; holds the version (`1.1h`).
-    Banner(String),
+    /// The welcome banner after a reset: `Grbl 1.1h ['$' for help]`, grblHAL's and FluidNC's
+    /// ([`crate::firmware::parse_banner`]).
+    Banner(crate::firmware::Banner),
     /// `[MSG:text]` feedback message; holds `text`.
     Message(String),
     /// Other bracketed push messages (`[GC:...]`, `[VER:...]`, `[OPT:...]`, `[G54:...]`,
@@ -601,9 +602,8 @@ pub fn parse_response(line: &str) -> Response {
             Err(_) => Response::Other(line.to_string()),
         };
     }
-    if let Some(rest) = line.strip_prefix("Grbl ") {
-        let version = rest.split_whitespace().next().unwrap_or_default();
-        return Response::Banner(version.to_string());
+    if let Some(banner) = crate::firmware::parse_banner(line) {
+        return Response::Banner(banner);
     }
     if let Some(inner) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
         if let Some(msg) = inner.strip_prefix("MSG:") {
@@ -724,8 +724,15 @@ mod tests {
         assert!(matches!(parse_response("error:x"), Response::Other(_)));
         assert_eq!(
             parse_response("Grbl 1.1h ['$' for help]"),
-            Response::Banner("1.1h".into())
+            Response::Banner(crate::firmware::Banner {
+                firmware: crate::firmware::Firmware::Grbl,
+                version: "1.1h".into()
+            })
         );
+        assert!(matches!(
+            parse_response("GrblHAL 1.1f ['$' or '$HELP' for help]"),
+            Response::Banner(b) if b.firmware == crate::firmware::Firmware::GrblHal
+        ));
         assert_eq!(
             parse_response("[MSG:'$H'|'$X' to unlock]"),
             Response::Message("'$H'|'$X' to unlock".into())

@@ -55,6 +55,7 @@ use tokio::sync::{broadcast, mpsc, oneshot, watch};
 use tokio::task::JoinHandle;
 use tokio::time::{Instant, MissedTickBehavior};
 
+use crate::firmware::{gc_spindle, parse_build_options, Banner, Firmware, SpindleWord};
 use crate::program::Program;
 use crate::protocol::{
     alarm_message, error_message, override_steps, parse_response, MachineState, OverrideKind,
@@ -111,6 +112,13 @@ pub struct ClientConfig {
     pub reconnect_attempts: u32,
     /// Pause between connection attempts.
     pub reconnect_delay: Duration,
+    /// Longest wait for the answer to a command line ([`GrblClient::command`]); also bounds
+    /// each connection attempt.
+    pub command_timeout: Duration,
+    /// Ask the controller for its RX buffer size (`$I`, the `[OPT:…]` line) on every connect and
+    /// budget by what it says instead of [`ClientConfig::rx_buffer_bytes`] (grblHAL: 1024,
+    /// FluidNC: larger). A controller that does not say keeps `rx_buffer_bytes`.
+    pub detect_rx_buffer: bool,
 }
 
 impl Default for ClientConfig {
@@ -128,6 +136,8 @@ impl Default for ClientConfig {
             unlock_after_reset: false,
             reconnect_attempts: 5,
             reconnect_delay: Duration::from_millis(500),
+            command_timeout: Duration::from_secs(10),
+            detect_rx_buffer: false,
         }
     }
 }
@@ -169,6 +179,12 @@ impl RxBudget {
         let n = self.lines.pop_front()?;
         self.used -= n;
         Some(n)
+    }
+
+    /// Changes the capacity (the controller reported another RX buffer size); lines in flight
+    /// stay counted.
+    pub fn set_capacity(&mut self, capacity: usize) {
+        self.capacity = capacity;
     }
 
     /// Forgets every outstanding line (after a reset GRBL's buffer is empty).
@@ -232,6 +248,11 @@ pub struct Progress {
     pub alarm: Option<u8>,
     /// Version from the last banner (`1.1h`).
     pub version: Option<String>,
+    /// Firmware from the last banner.
+    pub firmware: Option<Firmware>,
+    /// The planner's size in blocks: the most `Bf:` has shown free (0 until a report with
+    /// `Bf:` came).
+    pub planner_blocks: u16,
 }
 
 /// A discrete event from the controller or the link (through a `broadcast`).
@@ -241,8 +262,8 @@ pub enum Event {
     Connected,
     /// The link went down.
     Disconnected(String),
-    /// Reset banner, with the version.
-    Banner(String),
+    /// Reset banner: firmware and version.
+    Banner(Banner),
     /// `ALARM:N`.
     Alarm(u8),
     /// `error:N` to a line; `line` is the original program line number when it was a program
@@ -292,6 +313,16 @@ pub enum Fault {
     Busy,
     /// The start line is past the program's last line.
     NoSuchLine(usize),
+    /// A line does not fit in the controller's RX buffer, so character counting could never
+    /// send it (found before anything was sent).
+    LineTooLong {
+        /// Original line number.
+        line: usize,
+        /// Its bytes on the wire, `\n` included.
+        bytes: usize,
+        /// The RX budget (bytes).
+        budget: usize,
+    },
 }
 
 impl std::fmt::Display for Fault {
@@ -310,6 +341,14 @@ impl std::fmt::Display for Fault {
             Fault::ClientGone => write!(f, "the link task has ended"),
             Fault::Busy => write!(f, "another program is streaming"),
             Fault::NoSuchLine(l) => write!(f, "line {l} is past the program's last line"),
+            Fault::LineTooLong {
+                line,
+                bytes,
+                budget,
+            } => write!(
+                f,
+                "line {line} is {bytes} bytes on the wire; the controller's RX buffer takes {budget}"
+            ),
         }
     }
 }
@@ -329,6 +368,68 @@ pub struct SafeStopReport {
     pub state_after: Option<MachineState>,
     /// Steps that failed, in words.
     pub problems: Vec<String>,
+    /// The heat as the controller reports it after the stop ([`GrblClient::heat_state`]).
+    pub heat: HeatState,
+    /// Motion blocks still queued in the hold, which the reset discarded (from `Bf:`; `None`
+    /// when the controller does not report it).
+    pub pending_blocks: Option<u16>,
+}
+
+impl SafeStopReport {
+    /// One line for the operator: what was sent, the heat state and any problem.
+    pub fn summary(&self) -> String {
+        let mut s = format!("safe stop sent {}; {}", self.sent.join(" "), self.heat);
+        for p in &self.problems {
+            s.push_str("; ");
+            s.push_str(p);
+        }
+        s
+    }
+}
+
+/// The heat (spindle output: hot wire, laser, torch) as the controller itself reports it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum HeatState {
+    /// Off, confirmed from the controller's own answers.
+    Off {
+        /// What showed it (`$G M5, FS:0,0`).
+        evidence: String,
+    },
+    /// On.
+    On {
+        /// What showed it (`$G M3`, `FS:0,1000`, `A:S`).
+        evidence: String,
+    },
+    /// Not known (the link is down, the controller did not answer).
+    Unknown {
+        /// Why.
+        why: String,
+    },
+}
+
+impl HeatState {
+    /// Off, confirmed.
+    pub fn is_confirmed_off(&self) -> bool {
+        matches!(self, HeatState::Off { .. })
+    }
+}
+
+impl Default for HeatState {
+    fn default() -> Self {
+        HeatState::Unknown {
+            why: "not checked".into(),
+        }
+    }
+}
+
+impl std::fmt::Display for HeatState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HeatState::Off { evidence } => write!(f, "heat off confirmed ({evidence})"),
+            HeatState::On { evidence } => write!(f, "HEAT ON ({evidence})"),
+            HeatState::Unknown { why } => write!(f, "heat state unknown: {why}"),
+        }
+    }
 }
 
 /// Why a stream stopped, with the line accounting an operator needs to resume.
@@ -405,6 +506,14 @@ pub enum ClientError {
     /// The link task ended.
     #[error("the link task has ended")]
     Gone,
+    /// No answer to a command in time.
+    #[error("{command}: no answer within {after:?}")]
+    Timeout {
+        /// The command.
+        command: String,
+        /// How long we waited.
+        after: Duration,
+    },
 }
 
 /// The answer to a command line.
@@ -444,9 +553,25 @@ enum Cmd {
     },
     Realtime(Vec<Realtime>),
     Abort,
+    /// One connection attempt; `first` is written before anything else on the new link.
     Reconnect {
+        first: Vec<u8>,
         reply: oneshot::Sender<Result<(), ClientError>>,
     },
+    /// The controller's RX buffer size, as it reported it.
+    RxBuffer(usize),
+}
+
+/// Opens a link, giving up after `wait` (a TCP connect to a host that went away can otherwise
+/// hang for minutes).
+async fn connect_within(connector: &dyn Connect, wait: Duration) -> std::io::Result<BoxedTransport> {
+    match tokio::time::timeout(wait, connector.connect()).await {
+        Ok(r) => r,
+        Err(_) => Err(std::io::Error::new(
+            std::io::ErrorKind::TimedOut,
+            format!("no connection within {wait:?}"),
+        )),
+    }
 }
 
 enum Incoming {
@@ -480,8 +605,7 @@ impl GrblClient {
         config: ClientConfig,
     ) -> Result<GrblClient, ClientError> {
         let target = connector.describe();
-        let link = connector
-            .connect()
+        let link = connect_within(connector.as_ref(), config.command_timeout)
             .await
             .map_err(|source| ClientError::Connect {
                 target: target.clone(),
@@ -520,6 +644,7 @@ impl GrblClient {
             next_job: 1,
             polled_at: None,
             heard: false,
+            awaiting_reset: None,
         };
         task.attach(link);
         tokio::spawn(task.run());
@@ -531,6 +656,7 @@ impl GrblClient {
             target,
         };
         client.await_first_status(0).await?;
+        client.learn_rx_buffer().await;
         Ok(client)
     }
 
@@ -627,7 +753,11 @@ impl GrblClient {
             Err(mut e) => {
                 let act = !matches!(
                     e.fault,
-                    Fault::LinkLost(_) | Fault::ClientGone | Fault::Busy | Fault::NoSuchLine(_)
+                    Fault::LinkLost(_)
+                        | Fault::ClientGone
+                        | Fault::Busy
+                        | Fault::NoSuchLine(_)
+                        | Fault::LineTooLong { .. }
                 ) && self.config.on_fault == FaultAction::SafeStop;
                 if act {
                     e.safe_stop = Some(Box::new(self.safe_stop().await));
@@ -637,8 +767,13 @@ impl GrblClient {
         }
     }
 
-    /// Sends one command line (`$X`, `$G`, `M5`, `G0 X0`) and waits for its `ok`.
+    /// Sends one command line (`$X`, `$G`, `M5`, `G0 X0`) and waits for its `ok`, at most
+    /// [`ClientConfig::command_timeout`].
     pub async fn command(&self, text: &str) -> Result<CommandReply, ClientError> {
+        self.command_within(text, self.config.command_timeout).await
+    }
+
+    async fn command_within(&self, text: &str, wait: Duration) -> Result<CommandReply, ClientError> {
         let t = text.trim();
         if t.bytes()
             .any(|b| b == b'\n' || b == b'\r' || Realtime::from_byte(b).is_some())
@@ -653,11 +788,25 @@ impl GrblClient {
             })
             .await
             .map_err(|_| ClientError::Gone)?;
-        rx.await.unwrap_or(Err(ClientError::Gone))
+        // On a timeout the line stays in the answer queue, so its late answer is still matched
+        // to it and not to a later line.
+        match tokio::time::timeout(wait, rx).await {
+            Ok(answer) => answer.unwrap_or(Err(ClientError::Gone)),
+            Err(_) => Err(ClientError::Timeout {
+                command: t.to_string(),
+                after: wait,
+            }),
+        }
     }
 
     /// Writes real-time bytes now, ahead of anything else the link task has to do.
+    ///
+    /// # Errors
+    /// [`ClientError::NotConnected`] while the link is down: the bytes would go nowhere.
     pub async fn realtime(&self, commands: &[Realtime]) -> Result<(), ClientError> {
+        if !self.progress.borrow().connected {
+            return Err(ClientError::NotConnected);
+        }
         self.cmd
             .send(Cmd::Realtime(commands.to_vec()))
             .await
@@ -724,18 +873,42 @@ impl GrblClient {
         }
     }
 
-    /// Feed hold, soft reset, heat off (see the module documentation for the exact sequence).
+    /// Feed hold, soft reset, heat off, and the heat state read back from the controller (see
+    /// the module documentation for the exact sequence).
     pub async fn safe_stop(&self) -> SafeStopReport {
+        self.stop_sequence(StopLimits {
+            hold: self.config.hold_timeout,
+            reset: self.config.reset_timeout,
+            command: self.config.command_timeout,
+        })
+        .await
+    }
+
+    /// [`GrblClient::safe_stop`] done within about `budget` (a process that must exit soon:
+    /// the launcher's kill timeout): each wait gets a share of it.
+    pub async fn safe_stop_within(&self, budget: Duration) -> SafeStopReport {
+        self.stop_sequence(StopLimits {
+            hold: self.config.hold_timeout.min(budget.mul_f64(0.4)),
+            reset: self.config.reset_timeout.min(budget.mul_f64(0.2)),
+            command: self.config.command_timeout.min(budget.mul_f64(0.2)),
+        })
+        .await
+    }
+
+    async fn stop_sequence(&self, limits: StopLimits) -> SafeStopReport {
         let mut report = SafeStopReport::default();
         let mut rx = self.progress.clone();
-        if self.hold().await.is_err() {
-            report.problems.push("link task gone".into());
+        if let Err(e) = self.hold().await {
+            report.problems.push(format!("feed hold: {e}"));
+            report.heat = HeatState::Unknown {
+                why: format!("the safe stop could not be sent: {e}"),
+            };
             return report;
         }
         report.sent.push("!".into());
         // 1. Wait for the hold to stop the machine.
         let stopped = self
-            .poll_until(self.config.hold_timeout, |p| {
+            .poll_until(limits.hold, |p| {
                 matches!(
                     p.status.as_ref().and_then(|s| s.state),
                     Some(
@@ -749,25 +922,33 @@ impl GrblClient {
             })
             .await;
         report.stopped_before_reset = stopped;
+        report.pending_blocks = {
+            let p = rx.borrow();
+            p.status
+                .as_ref()
+                .and_then(|s| s.buffer)
+                .filter(|_| p.planner_blocks > 0)
+                .map(|b| p.planner_blocks.saturating_sub(b.planner_free))
+        };
         if !stopped {
             report
                 .problems
                 .push("no stop reported before the reset".into());
         }
-        // 2. Soft reset.
+        // 2. Soft reset: the answer queue is forgotten as the byte goes out, so no `ok` sent
+        // before it can be taken for the `M5`'s.
         let resets = rx.borrow_and_update().resets;
         let _ = self.cmd.send(Cmd::Abort).await;
-        if self.soft_reset().await.is_err() {
-            report.problems.push("link task gone".into());
+        if let Err(e) = self.soft_reset().await {
+            report.problems.push(format!("soft reset: {e}"));
+            report.heat = HeatState::Unknown {
+                why: format!("the reset could not be sent: {e}"),
+            };
             return report;
         }
         report.sent.push("0x18".into());
         report.reset_confirmed = matches!(
-            tokio::time::timeout(
-                self.config.reset_timeout,
-                rx.wait_for(|p| p.resets > resets)
-            )
-            .await,
+            tokio::time::timeout(limits.reset, rx.wait_for(|p| p.resets > resets)).await,
             Ok(Ok(_))
         );
         if !report.reset_confirmed {
@@ -775,20 +956,20 @@ impl GrblClient {
         }
         let seen = rx.borrow_and_update().status_count;
         let _ = self
-            .poll_until(self.config.reset_timeout, |p| p.status_count > seen)
+            .poll_until(limits.reset, |p| p.status_count > seen)
             .await;
         let mut state = rx.borrow().status.as_ref().and_then(|s| s.state);
         // 3. Heat off.
         if state == Some(MachineState::Alarm) && self.config.unlock_after_reset {
             report.sent.push("$X".into());
-            match self.command("$X").await {
+            match self.command_within("$X", limits.command).await {
                 Ok(_) => state = Some(MachineState::Idle),
                 Err(e) => report.problems.push(format!("$X: {e}")),
             }
         }
         if state != Some(MachineState::Alarm) {
             report.sent.push("M5".into());
-            match self.command("M5").await {
+            match self.command_within("M5", limits.command).await {
                 Ok(_) => report.heat_off_acked = true,
                 Err(e) => report.problems.push(format!("M5: {e}")),
             }
@@ -798,7 +979,94 @@ impl GrblClient {
                 .push("controller in alarm after the reset: M5 not sent (the reset already switched the spindle off)".into());
         }
         report.state_after = state;
+        // 4. Read the heat back from the controller.
+        report.heat = self.heat_state_within(limits.command).await;
         report
+    }
+
+    /// The heat as the controller reports it: its parser state (`$G`: `M3`/`M4` on, `M5` off)
+    /// and a fresh status report (`FS:` spindle speed 0, no `A:S`/`A:C`). Off only when both
+    /// say so; on when either says on; unknown when the link is down or an answer is missing.
+    /// `$G` is answered in every state, alarm and hold included.
+    pub async fn heat_state(&self) -> HeatState {
+        self.heat_state_within(self.config.command_timeout).await
+    }
+
+    async fn heat_state_within(&self, wait: Duration) -> HeatState {
+        if !self.progress.borrow().connected {
+            return HeatState::Unknown {
+                why: "the link is down".into(),
+            };
+        }
+        let word = match self.command_within("$G", wait).await {
+            Ok(reply) => reply.lines.iter().find_map(|l| {
+                l.strip_prefix("[GC:")
+                    .and_then(|b| b.strip_suffix(']'))
+                    .and_then(gc_spindle)
+            }),
+            Err(e) => {
+                return HeatState::Unknown {
+                    why: format!("$G: {e}"),
+                }
+            }
+        };
+        let seen = self.progress.borrow().status_count;
+        if !self.poll_until(wait, |p| p.status_count > seen).await {
+            return HeatState::Unknown {
+                why: format!("no status report within {wait:?}"),
+            };
+        }
+        let status = self.progress.borrow().status.clone().unwrap_or_default();
+        let speed = status.spindle.unwrap_or(0.0);
+        let accessories = status.accessories.clone().unwrap_or_default();
+        let mut on = Vec::new();
+        match word {
+            Some(SpindleWord::M3) => on.push("$G M3".to_string()),
+            Some(SpindleWord::M4) => on.push("$G M4".to_string()),
+            _ => {}
+        }
+        if speed > 0.0 {
+            on.push(format!("FS:{},{speed}", status.feed.unwrap_or(0.0)));
+        }
+        if accessories.contains('S') || accessories.contains('C') {
+            on.push(format!("A:{accessories}"));
+        }
+        if !on.is_empty() {
+            return HeatState::On {
+                evidence: on.join(", "),
+            };
+        }
+        match word {
+            Some(SpindleWord::M5) => HeatState::Off {
+                evidence: match status.spindle {
+                    Some(_) => format!("$G M5, FS:{},0", status.feed.unwrap_or(0.0)),
+                    None => "$G M5".into(),
+                },
+            },
+            _ => HeatState::Unknown {
+                why: "$G did not report the spindle state".into(),
+            },
+        }
+    }
+
+    /// After a link drop: connects again writing `!` (feed hold) before anything else, then
+    /// runs the safe stop and reads the heat back. When no link comes back the report says
+    /// the heat state is unknown, and why.
+    pub async fn reconnect_and_stop(&self) -> SafeStopReport {
+        match self.reconnect_sending(&[Realtime::FeedHold]).await {
+            Ok(_) => {
+                let mut report = self.safe_stop().await;
+                report.sent.insert(0, "! (first byte on the new link)".into());
+                report
+            }
+            Err(e) => SafeStopReport {
+                problems: vec![format!("reconnect: {e}")],
+                heat: HeatState::Unknown {
+                    why: format!("the link did not come back ({e}); check the machine"),
+                },
+                ..SafeStopReport::default()
+            },
+        }
     }
 
     /// Sends `?` every 50 ms (tokio time) until `pred` holds or `timeout` passes.
@@ -820,18 +1088,75 @@ impl GrblClient {
     }
 
     /// Re-opens the link after a drop (or at any time) and waits for a status report. The
-    /// controller is not reset; the returned progress holds the last acknowledged line.
+    /// controller is not reset; the returned progress holds the last acknowledged line. Tries
+    /// [`ClientConfig::reconnect_attempts`] times, each bounded by
+    /// [`ClientConfig::command_timeout`]; commands are served between attempts.
     pub async fn reconnect(&self) -> Result<Progress, ClientError> {
-        let seen = self.progress.borrow().status_count;
-        let (tx, rx) = oneshot::channel();
-        self.cmd
-            .send(Cmd::Reconnect { reply: tx })
-            .await
-            .map_err(|_| ClientError::Gone)?;
-        rx.await.unwrap_or(Err(ClientError::Gone))?;
-        self.await_first_status(seen).await?;
-        Ok(self.progress.borrow().clone())
+        self.reconnect_sending(&[]).await
     }
+
+    async fn reconnect_sending(&self, first: &[Realtime]) -> Result<Progress, ClientError> {
+        let mut last = None;
+        for attempt in 0..self.config.reconnect_attempts.max(1) {
+            if attempt > 0 {
+                tokio::time::sleep(self.config.reconnect_delay).await;
+            }
+            let seen = self.progress.borrow().status_count;
+            let (tx, rx) = oneshot::channel();
+            self.cmd
+                .send(Cmd::Reconnect {
+                    first: first.iter().map(|r| r.byte()).collect(),
+                    reply: tx,
+                })
+                .await
+                .map_err(|_| ClientError::Gone)?;
+            match rx.await.unwrap_or(Err(ClientError::Gone)) {
+                Ok(()) => {
+                    self.await_first_status(seen).await?;
+                    self.learn_rx_buffer().await;
+                    return Ok(self.progress.borrow().clone());
+                }
+                Err(ClientError::Gone) => return Err(ClientError::Gone),
+                Err(e) => last = Some(e),
+            }
+        }
+        Err(last.unwrap_or(ClientError::NotConnected))
+    }
+
+    /// With [`ClientConfig::detect_rx_buffer`], asks `$I` for the RX buffer size and budgets by
+    /// it. A controller that is busy (`$I` answers `error:8` outside idle) or does not say keeps
+    /// the configured size.
+    async fn learn_rx_buffer(&self) {
+        if !self.config.detect_rx_buffer || self.config.flow != FlowControl::CharacterCounting {
+            return;
+        }
+        let Ok(reply) = self.command("$I").await else {
+            return;
+        };
+        let size = reply.lines.iter().find_map(|l| {
+            l.strip_prefix("[OPT:")
+                .and_then(|b| b.strip_suffix(']'))
+                .and_then(parse_build_options)
+        });
+        if let Some(options) = size.filter(|o| o.rx_buffer_bytes >= 16) {
+            let _ = self
+                .cmd
+                .send(Cmd::RxBuffer(options.rx_buffer_bytes))
+                .await;
+        }
+    }
+
+    /// The character-counting budget in bytes (`usize::MAX` under send-response).
+    pub fn rx_budget(&self) -> usize {
+        self.progress.borrow().rx_budget
+    }
+}
+
+/// How long each step of a safe stop may wait.
+struct StopLimits {
+    hold: Duration,
+    reset: Duration,
+    command: Duration,
 }
 
 enum Sent {
@@ -861,6 +1186,8 @@ struct Job {
     started: Instant,
     all_acked_at: Option<(Instant, u64)>,
     resetting: bool,
+    /// Lines that were unanswered when a soft reset went out.
+    unacked_at_reset: Vec<usize>,
 }
 
 struct LinkTask {
@@ -886,6 +1213,9 @@ struct LinkTask {
     polled_at: Option<Instant>,
     /// A line has arrived on this connection.
     heard: bool,
+    /// A soft reset was written and neither its banner nor a second status report has come
+    /// yet (the count of status reports since): nothing is sent meanwhile.
+    awaiting_reset: Option<u32>,
 }
 
 impl LinkTask {
@@ -1019,14 +1349,25 @@ impl LinkTask {
         match cmd {
             Cmd::Realtime(rts) => {
                 let bytes: Vec<u8> = rts.iter().map(|r| r.byte()).collect();
-                if rts.contains(&Realtime::SoftReset) {
+                let reset = rts.contains(&Realtime::SoftReset);
+                if reset {
                     if let Some(job) = self.job.as_mut() {
                         job.resetting = true;
                     }
                 }
                 self.write_now(&bytes).await;
+                if reset && self.writer.is_some() {
+                    self.reset_written();
+                }
                 if rts.contains(&Realtime::StatusQuery) {
                     self.polled();
+                }
+            }
+            Cmd::RxBuffer(bytes) => {
+                if self.config.flow == FlowControl::CharacterCounting {
+                    let budget = bytes.saturating_sub(1);
+                    self.budget.set_capacity(budget);
+                    self.progress.send_modify(|p| p.rx_budget = budget);
                 }
             }
             Cmd::Line { text, reply } => {
@@ -1059,6 +1400,25 @@ impl LinkTask {
                     }));
                     return;
                 }
+                if self.config.flow == FlowControl::CharacterCounting {
+                    let budget = self.budget.capacity();
+                    if let Some(l) = program.lines()[start..]
+                        .iter()
+                        .find(|l| l.wire_len() > budget)
+                    {
+                        let _ = reply.send(Err(StreamError {
+                            fault: Fault::LineTooLong {
+                                line: l.number,
+                                bytes: l.wire_len(),
+                                budget,
+                            },
+                            last_acked_line: None,
+                            unacked_lines: vec![],
+                            safe_stop: None,
+                        }));
+                        return;
+                    }
+                }
                 let id = self.next_job;
                 self.next_job += 1;
                 let total = program.len() - start;
@@ -1080,6 +1440,7 @@ impl LinkTask {
                     started: Instant::now(),
                     all_acked_at: None,
                     resetting: false,
+                    unacked_at_reset: Vec::new(),
                 });
             }
             Cmd::Abort => {
@@ -1091,35 +1452,33 @@ impl LinkTask {
                     job.resetting = true;
                 }
             }
-            Cmd::Reconnect { reply } => {
+            Cmd::Reconnect { first, reply } => {
                 if let Some(r) = self.reader.take() {
                     r.abort();
                 }
                 if let Some(mut w) = self.writer.take() {
                     let _ = w.shutdown().await;
                 }
-                let mut last = None;
-                for attempt in 0..self.config.reconnect_attempts.max(1) {
-                    if attempt > 0 {
-                        tokio::time::sleep(self.config.reconnect_delay).await;
-                    }
-                    match self.connector.connect().await {
-                        Ok(link) => {
-                            self.link_lost_cleanup();
-                            self.attach(link);
-                            last = None;
-                            break;
+                let wait = self.config.command_timeout;
+                let answer = match connect_within(self.connector.as_ref(), wait).await {
+                    Ok(link) => {
+                        self.link_lost_cleanup();
+                        self.awaiting_reset = None;
+                        self.attach(link);
+                        if !first.is_empty() {
+                            self.write_now(&first).await;
                         }
-                        Err(e) => last = Some(e),
+                        Ok(())
                     }
-                }
-                let _ = reply.send(match last {
-                    None => Ok(()),
-                    Some(source) => Err(ClientError::Connect {
-                        target: self.connector.describe(),
-                        source,
-                    }),
-                });
+                    Err(source) => {
+                        self.progress.send_modify(|p| p.connected = false);
+                        Err(ClientError::Connect {
+                            target: self.connector.describe(),
+                            source,
+                        })
+                    }
+                };
+                let _ = reply.send(answer);
             }
         }
     }
@@ -1131,6 +1490,9 @@ impl LinkTask {
         }
         if std::mem::take(&mut self.hold_pending) {
             self.write_now(&[Realtime::FeedHold.byte()]).await;
+        }
+        if self.awaiting_reset.is_some() {
+            return;
         }
         self.out.clear();
         let char_counting = self.config.flow == FlowControl::CharacterCounting;
@@ -1202,15 +1564,13 @@ impl LinkTask {
         let Some(job) = &self.job else {
             return vec![];
         };
-        self.sent
-            .iter()
-            .filter_map(|e| match e.what {
-                Sent::Program { index, job: id } if id == job.id => {
-                    Some(job.program.lines()[index].number)
-                }
-                _ => None,
-            })
-            .collect()
+        let in_queue = self.sent.iter().filter_map(|e| match e.what {
+            Sent::Program { index, job: id } if id == job.id => {
+                Some(job.program.lines()[index].number)
+            }
+            _ => None,
+        });
+        job.unacked_at_reset.iter().copied().chain(in_queue).collect()
     }
 
     /// Ends the current job with `fault` (no further line is sent). The entries already sent
@@ -1293,42 +1653,13 @@ impl LinkTask {
                 }
             }
             Response::Status(s) => self.on_status(s),
-            Response::Banner(version) => {
-                let _ = self.events.send(Event::Banner(version.clone()));
-                // GRBL flushed its RX buffer: nothing sent before is going to be answered.
-                if let Some(resetting) = self
-                    .job
-                    .as_ref()
-                    .filter(|j| j.reply.is_some())
-                    .map(|j| j.resetting)
-                {
-                    self.fail_job(if resetting {
-                        Fault::Aborted
-                    } else {
-                        Fault::UnexpectedReset
-                    });
-                }
-                for e in self.sent.drain(..) {
-                    if let Sent::Command {
-                        reply: Some(r),
-                        text,
-                        ..
-                    } = e.what
-                    {
-                        let _ = r.send(Err(ClientError::Rejected {
-                            command: text,
-                            code: 0,
-                            message: "controller reset before answering",
-                        }));
-                    }
-                }
-                self.budget.clear();
-                self.job = None;
+            Response::Banner(banner) => {
+                let _ = self.events.send(Event::Banner(banner.clone()));
+                self.controller_was_reset();
                 self.progress.send_modify(|p| {
                     p.resets += 1;
-                    p.version = Some(version);
-                    p.rx_bytes_in_flight = 0;
-                    p.streaming = false;
+                    p.version = Some(banner.version);
+                    p.firmware = Some(banner.firmware);
                     if p.alarm != Some(3) {
                         p.alarm = None;
                     }
@@ -1348,6 +1679,65 @@ impl LinkTask {
                 let _ = self.events.send(Event::Other(o));
             }
         }
+    }
+
+    /// A soft reset went out: GRBL flushes its RX buffer and planner, so nothing sent before it
+    /// will be answered, and an `ok` still on its way belongs to a line that is gone. The
+    /// answer queue is emptied now and nothing is sent until the reset shows (its banner, or a
+    /// second status report for a controller that prints none).
+    fn reset_written(&mut self) {
+        // The job ends when the controller shows the reset (an `ALARM:3` for a reset in motion
+        // comes first and names the fault); its unanswered lines are remembered for that.
+        let unacked = self.unacked_lines();
+        if let Some(job) = self.job.as_mut() {
+            job.unacked_at_reset = unacked;
+        }
+        self.forget_answers();
+        self.awaiting_reset = Some(0);
+    }
+
+    /// The controller reset (asked for or not): the current job ends, every unanswered line is
+    /// forgotten.
+    fn controller_was_reset(&mut self) {
+        self.awaiting_reset = None;
+        if let Some(resetting) = self
+            .job
+            .as_ref()
+            .filter(|j| j.reply.is_some())
+            .map(|j| j.resetting)
+        {
+            self.fail_job(if resetting {
+                Fault::Aborted
+            } else {
+                Fault::UnexpectedReset
+            });
+        }
+        self.forget_answers();
+        self.job = None;
+    }
+
+    /// Every unanswered line is forgotten (command callers get an error now).
+    fn forget_answers(&mut self) {
+        for e in self.sent.drain(..) {
+            if let Sent::Command {
+                reply: Some(r),
+                text,
+                ..
+            } = e.what
+            {
+                let _ = r.send(Err(ClientError::Rejected {
+                    command: text,
+                    code: 0,
+                    message: "controller reset before answering",
+                }));
+            }
+        }
+        self.budget.clear();
+        let streaming = self.job.as_ref().is_some_and(|j| j.reply.is_some());
+        self.progress.send_modify(|p| {
+            p.rx_bytes_in_flight = 0;
+            p.streaming = streaming;
+        });
     }
 
     /// Push lines belong to the command at the head of the answer queue, if any.
@@ -1434,12 +1824,22 @@ impl LinkTask {
     }
 
     fn on_status(&mut self, s: StatusReport) {
+        // The first report may have been on its way before the reset; the second answers a `?`
+        // written after it.
+        if let Some(n) = self.awaiting_reset.as_mut() {
+            *n += 1;
+            if *n >= 2 {
+                self.controller_was_reset();
+            }
+        }
         if let Some(b) = s.buffer {
             self.planner_size = self.planner_size.max(b.planner_free);
         }
         let state = s.state;
         let planner_empty = s.buffer.is_none_or(|b| b.planner_free >= self.planner_size);
+        let planner_size = self.planner_size;
         self.progress.send_modify(|p| {
+            p.planner_blocks = planner_size;
             if let Some(w) = &s.wco {
                 p.wco = Some(w.clone());
             }

@@ -68,6 +68,10 @@ pub struct BridgeParams {
     pub feedback_period_s: f64,
     /// How long a finished goal's result waits for its client to ask for it (s).
     pub result_timeout_s: f64,
+    /// On SIGINT/SIGTERM, how long the node spends bringing every machine to a safe state
+    /// (abort, safe stop, heat read back) before it exits (s), 0.5..30. Keep it under the
+    /// launcher's kill timeout (`cell launch`: 5 s; `ros2 launch`: `sigterm_timeout`, 5 s).
+    pub shutdown_budget_s: f64,
 }
 
 impl Default for BridgeParams {
@@ -81,6 +85,7 @@ impl Default for BridgeParams {
             status_rate_hz: 10.0,
             feedback_period_s: 0.1,
             result_timeout_s: 600.0,
+            shutdown_budget_s: 4.0,
         }
     }
 }
@@ -125,6 +130,12 @@ pub fn controller_specs(p: &BridgeParams) -> Result<(Vec<ControllerSpec>, usize)
         return Err(NodeParamError(format!(
             "status_rate_hz: {}: expected 5..50",
             p.status_rate_hz
+        )));
+    }
+    if !(p.shutdown_budget_s.is_finite() && (0.5..=30.0).contains(&p.shutdown_budget_s)) {
+        return Err(NodeParamError(format!(
+            "shutdown_budget_s: {}: expected 0.5..30 s",
+            p.shutdown_budget_s
         )));
     }
     if !(p.feedback_period_s.is_finite() && (0.01..=10.0).contains(&p.feedback_period_s)) {
@@ -308,15 +319,16 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
                 }
             }
             _ = node.shutdown().requested() => {
-                // Nothing may keep cutting once the bridge is gone.
-                for c in controllers.iter() {
-                    if c.status().state == MachineStatus::STATE_RUNNING {
-                        let abort = MachineCommand { machine_id: c.id().into(), command: MachineCommand::COMMAND_ABORT, value: 0 };
-                        match c.command(&abort).await {
-                            Ok(m) => tracing::warn!("shutting down: {m}"),
-                            Err(m) => tracing::warn!("shutting down: {m}"),
-                        }
-                    }
+                // Nothing may keep cutting once the bridge is gone: every machine is brought
+                // to a safe state, read back from its controller, before the process exits.
+                let budget = Duration::from_secs_f64(p.shutdown_budget_s);
+                let stops = futures::future::join_all(
+                    controllers.iter().map(|c| c.stop_for_shutdown(budget)),
+                )
+                .await;
+                for line in stops {
+                    tracing::warn!("shutting down: {line}");
+                    node.rerun().log_text("/machine/log", &format!("shutting down: {line}"));
                 }
                 log_statuses_to_rerun(&node, &controllers, &mut rerun_logger, frame);
                 rerun_logger.flush(node.rerun());
