@@ -8,6 +8,8 @@ use std::{
 
 use cell_runtime::{CellNode, FastPathMode, NodeSetup};
 
+pub mod machines;
+
 static NEXT: AtomicU16 = AtomicU16::new(0);
 
 /// A DDS domain no other running test uses: test binaries run one at a time, tests inside one
