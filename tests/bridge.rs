@@ -355,6 +355,12 @@ async fn alarms_and_bad_lines_stop_the_program_and_name_the_line() {
     .await;
     assert_eq!(alarm.outcome, R::OUTCOME_ALARM, "{}", alarm.message);
     assert!(alarm.message.contains("ALARM:2"), "{}", alarm.message);
+    // In alarm `M5` is not accepted, but `$G` is: the reset's M5 is read back.
+    assert!(
+        alarm.message.contains("heat off confirmed ($G M5"),
+        "{}",
+        alarm.message
+    );
     assert_eq!(alarm.final_state, MachineStatus::STATE_ALARM);
     let s = status_until(&mut op.status, "alarming", |s| {
         s.state == MachineStatus::STATE_ALARM

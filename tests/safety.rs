@@ -266,3 +266,45 @@ async fn a_bridge_killed_mid_program_is_followed_by_one_that_finds_the_heat_on_a
     drop(restarted);
     assert_safe(&sim, &addr, "after a killed bridge").await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_cancelled_goal_ends_canceled_with_the_heat_read_back_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, file) = grbl_sim(dir.path(), "cancel", Faults::default(), 2.0, "").await;
+    let addr = address_in(&file);
+    let domain = fresh_domain();
+    let bridge = BridgeProcess::start(dir.path(), domain, &file);
+    let op = operator(domain).await;
+    let (goal_id, response) = within(
+        op.client
+            .async_send_goal(goal(&grbl_program("cancel", 400), "")),
+    )
+    .await
+    .expect("sent");
+    assert!(response.accepted);
+    let result = cell_runtime::action::request_result(
+        &op.client,
+        goal_id,
+        DELIVERY_TIMEOUT * 4,
+        DELIVERY_TIMEOUT * 4,
+    );
+    let cancel = async {
+        cutting(&sim).await;
+        op.client.cancel_goal(goal_id).expect("cancel sent");
+    };
+    let (result, ()) = tokio::join!(result, cancel);
+    let (status, result) = result.expect("result");
+    assert_eq!(
+        status,
+        cell_runtime::action::GoalStatusEnum::Canceled,
+        "{}",
+        result.message
+    );
+    assert!(
+        result.message.contains("heat off confirmed"),
+        "{}",
+        result.message
+    );
+    drop(bridge);
+    assert_safe(&sim, &addr, "after a cancel").await;
+}

@@ -558,13 +558,16 @@ enum Cmd {
         first: Vec<u8>,
         reply: oneshot::Sender<Result<(), ClientError>>,
     },
-    /// The controller's RX buffer size, as it reported it.
-    RxBuffer(usize),
+    /// The controller's RX buffer size, as it reported it; answered once the budget is set.
+    RxBuffer(usize, oneshot::Sender<()>),
 }
 
 /// Opens a link, giving up after `wait` (a TCP connect to a host that went away can otherwise
 /// hang for minutes).
-async fn connect_within(connector: &dyn Connect, wait: Duration) -> std::io::Result<BoxedTransport> {
+async fn connect_within(
+    connector: &dyn Connect,
+    wait: Duration,
+) -> std::io::Result<BoxedTransport> {
     match tokio::time::timeout(wait, connector.connect()).await {
         Ok(r) => r,
         Err(_) => Err(std::io::Error::new(
@@ -773,7 +776,11 @@ impl GrblClient {
         self.command_within(text, self.config.command_timeout).await
     }
 
-    async fn command_within(&self, text: &str, wait: Duration) -> Result<CommandReply, ClientError> {
+    async fn command_within(
+        &self,
+        text: &str,
+        wait: Duration,
+    ) -> Result<CommandReply, ClientError> {
         let t = text.trim();
         if t.bytes()
             .any(|b| b == b'\n' || b == b'\r' || Realtime::from_byte(b).is_some())
@@ -1056,7 +1063,9 @@ impl GrblClient {
         match self.reconnect_sending(&[Realtime::FeedHold]).await {
             Ok(_) => {
                 let mut report = self.safe_stop().await;
-                report.sent.insert(0, "! (first byte on the new link)".into());
+                report
+                    .sent
+                    .insert(0, "! (first byte on the new link)".into());
                 report
             }
             Err(e) => SafeStopReport {
@@ -1139,10 +1148,15 @@ impl GrblClient {
                 .and_then(parse_build_options)
         });
         if let Some(options) = size.filter(|o| o.rx_buffer_bytes >= 16) {
-            let _ = self
+            let (tx, rx) = oneshot::channel();
+            if self
                 .cmd
-                .send(Cmd::RxBuffer(options.rx_buffer_bytes))
-                .await;
+                .send(Cmd::RxBuffer(options.rx_buffer_bytes, tx))
+                .await
+                .is_ok()
+            {
+                let _ = rx.await;
+            }
         }
     }
 
@@ -1363,12 +1377,13 @@ impl LinkTask {
                     self.polled();
                 }
             }
-            Cmd::RxBuffer(bytes) => {
+            Cmd::RxBuffer(bytes, done) => {
                 if self.config.flow == FlowControl::CharacterCounting {
                     let budget = bytes.saturating_sub(1);
                     self.budget.set_capacity(budget);
                     self.progress.send_modify(|p| p.rx_budget = budget);
                 }
+                let _ = done.send(());
             }
             Cmd::Line { text, reply } => {
                 if self.writer.is_none() {
@@ -1570,7 +1585,11 @@ impl LinkTask {
             }
             _ => None,
         });
-        job.unacked_at_reset.iter().copied().chain(in_queue).collect()
+        job.unacked_at_reset
+            .iter()
+            .copied()
+            .chain(in_queue)
+            .collect()
     }
 
     /// Ends the current job with `fault` (no further line is sent). The entries already sent
