@@ -20,11 +20,24 @@
 //! the configured [`FaultAction`], by default [`GrblClient::safe_stop`]:
 //! 1. `!` feed hold (already sent), then wait (polling `?`) until the machine reports `Hold:0`,
 //!    `Idle`, `Alarm` or `Door` (the controlled stop keeps the position);
-//! 2. `0x18` soft reset, and wait for the `Grbl 1.1h` banner (GRBL flushes its RX buffer and
-//!    planner and switches the spindle, which drives the heat, off);
+//! 2. `0x18` soft reset, and wait for the banner (GRBL 1.1 `Grbl 1.1h …`, grblHAL `GrblHAL
+//!    1.1f …`, FluidNC `Grbl 3.7 [FluidNC v3.7.8 …]`; see [`crate::firmware`]). GRBL flushes its
+//!    RX buffer and planner and switches the spindle, which drives the heat, off. The answer
+//!    queue is emptied the moment the reset byte goes out, and nothing is sent until the banner
+//!    (or, for a controller that prints none, a second status report) shows the reset: an `ok`
+//!    still on the wire from before belongs to a line that is gone and must not answer `M5`;
 //! 3. only if the controller is not in alarm after the reset (or `unlock_after_reset` is set, in
-//!    which case `$X` is sent first): `M5`, so the heat is off in the modal state as well, and
-//!    its `ok` confirms it.
+//!    which case `$X` is sent first): `M5`, so the heat is off in the modal state as well;
+//! 4. the heat is read back ([`GrblClient::heat_state`]): `$G` must report `M5` and a fresh
+//!    status report `FS:…,0` with no `A:S`/`A:C`. Only then is it "heat off confirmed"
+//!    ([`HeatState::Off`]); a missing answer leaves it [`HeatState::Unknown`], with the reason.
+//!
+//! After a link drop, [`GrblClient::reconnect_and_stop`] writes `!` as the first byte on the new
+//! link and then runs the safe stop. Every command has a timeout
+//! ([`ClientConfig::command_timeout`], which also bounds each connection attempt), so no step
+//! waits for ever on a controller that went silent. A program line longer than the RX budget is
+//! refused before anything is sent ([`Fault::LineTooLong`]): character counting could never send
+//! it. With [`ClientConfig::detect_rx_buffer`] the budget comes from the controller's `$I`.
 //!
 //! A silent controller is a link loss too: a missing `ok` alone is not (GRBL withholds `ok`
 //! while its planner is full during a long slow move), but GRBL answers `?` at once in every

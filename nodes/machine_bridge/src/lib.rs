@@ -19,6 +19,11 @@
 //! - With `program_topic` set, runs every `MachineProgram` published there (the emitter's
 //!   output), one at a time per controller.
 //!
+//! - On SIGINT or SIGTERM, before the process exits, every machine is brought to a safe state
+//!   within `shutdown_budget_s`: running programs are aborted (their safe stop runs), a machine
+//!   found moving, held or hot is safe-stopped, and the heat is read back from each controller
+//!   and logged ("heat off confirmed", or why it could not be).
+//!
 //! Bad input (an unknown controller, a program in the wrong dialect or for another machine, a
 //! line GRBL cannot take) gets an answer or a log line naming it; the node keeps running.
 
