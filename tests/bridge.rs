@@ -18,8 +18,8 @@ use cell_msgs::{
 use cell_profiles::MachineProfile;
 use cell_runtime::{CellNode, QosPreset};
 use common::machines::{
-    accepted, emitted, execute, goal, grbl_program, grbl_sim, operator, sent_lines,
-    status_until, texts, wing_panel, Operator,
+    accepted, emitted, execute, goal, grbl_program, grbl_sim, operator, sent_lines, status_until,
+    texts, wing_panel, Operator,
 };
 use common::{fresh_domain, node, within, DELIVERY_TIMEOUT};
 use machine_bridge::{run, BridgeParams};
@@ -289,7 +289,11 @@ async fn after_a_drop_the_operator_resumes_from_the_reported_line() {
         all[..next_index],
         "the machine ran every line before the resume line, and no other"
     );
-    assert_eq!(executed.last().map(String::as_str), Some("M5"), "then the safe stop's M5");
+    assert_eq!(
+        executed.last().map(String::as_str),
+        Some("M5"),
+        "then the safe stop's M5"
+    );
 
     let (resumed, _) = execute(
         &op.client,
@@ -310,7 +314,30 @@ async fn after_a_drop_the_operator_resumes_from_the_reported_line() {
     // Between the two runs: the safe stop's M5, then what the resume sent to restore the
     // program's state at the resume line (never a program line twice).
     let between = &executed[next_index..executed.len() - (all.len() - next_index)];
-    assert_eq!(between.first().map(String::as_str), Some("M5"), "{between:?}");
+    assert_eq!(
+        between.first().map(String::as_str),
+        Some("M5"),
+        "{between:?}"
+    );
+    // What the resume sent is the preamble for that line, and the resumed line ran in the
+    // state the line before it ran in: G93, the wire heated with the program's S.
+    let preamble = cell_grbl::resume::preamble(&sent, next).unwrap();
+    assert_eq!(between[1..], preamble[..]);
+    let log = sim.executed();
+    let (before, resumed) = (
+        &log[next_index - 1].parser,
+        &log[log.len() - (all.len() - next_index)].parser,
+    );
+    let groups = |s: &cell_grbl::sim::ParserState| {
+        let g = [&s.coordinate_system, &s.plane, &s.units, &s.distance];
+        let h = [&s.feed_mode, &s.spindle, &s.spindle_speed];
+        g.into_iter().chain(h).cloned().collect::<Vec<_>>()
+    };
+    assert_eq!(groups(resumed), groups(before), "{preamble:?}");
+    assert_eq!(
+        (resumed.feed_mode.as_str(), resumed.spindle.as_str()),
+        ("G93", "M3")
+    );
     bridge.abort();
 }
 

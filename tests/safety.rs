@@ -130,9 +130,7 @@ fn address_in(controller_file: &str) -> String {
 
 /// Sends a goal and returns at once (the test stops the bridge while it runs).
 async fn start_goal(op: &Operator, goal: ExecuteProgramGoal) {
-    let (_, response) = within(op.client.async_send_goal(goal))
-        .await
-        .expect("sent");
+    let (_, response) = within(op.client.async_send_goal(goal)).await.expect("sent");
     assert!(response.accepted, "the bridge accepts the goal");
 }
 
@@ -163,43 +161,70 @@ async fn assert_safe(sim: &SimHandle, addr: &str, what: &str) {
     );
 }
 
+/// A simulated controller, a bridge process driving it and an operator node on a fresh domain.
+struct Cell {
+    dir: tempfile::TempDir,
+    sim: SimHandle,
+    file: String,
+    addr: String,
+    bridge: BridgeProcess,
+    op: Operator,
+}
+
+impl Cell {
+    async fn start(id: &str) -> Cell {
+        let dir = tempfile::tempdir().unwrap();
+        let (sim, file) = grbl_sim(dir.path(), id, Faults::default(), 2.0, "").await;
+        let addr = address_in(&file);
+        let domain = fresh_domain();
+        let bridge = BridgeProcess::start(dir.path(), domain, &file);
+        let op = operator(domain).await;
+        Cell {
+            dir,
+            sim,
+            file,
+            addr,
+            bridge,
+            op,
+        }
+    }
+
+    /// Sends a 400-point wing panel as job `job` and waits until it cuts, heat on.
+    async fn cut(&self, job: &str) {
+        start_goal(&self.op, goal(&grbl_program(job, 400), "")).await;
+        cutting(&self.sim).await;
+    }
+
+    /// The bridge exited 0 after `signal` and logged the heat read back off.
+    async fn stop_bridge_with(&mut self, signal: &str) {
+        self.bridge.signal(signal);
+        let code = self.bridge.exited().await;
+        assert_eq!(code, Some(0), "{}", self.bridge.log());
+        assert!(
+            self.bridge.log().contains("heat off confirmed"),
+            "the bridge read the heat back before exiting:\n{}",
+            self.bridge.log()
+        );
+    }
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sigint_mid_program_stops_the_machine_with_the_heat_off_before_the_bridge_exits() {
-    let dir = tempfile::tempdir().unwrap();
-    let (sim, file) = grbl_sim(dir.path(), "hotwire", Faults::default(), 2.0, "").await;
-    let addr = address_in(&file);
-    let domain = fresh_domain();
-    let mut bridge = BridgeProcess::start(dir.path(), domain, &file);
-    let op = operator(domain).await;
-    start_goal(&op, goal(&grbl_program("sigint", 400), "")).await;
-    cutting(&sim).await;
-    bridge.signal("INT");
-    let code = bridge.exited().await;
-    assert_eq!(code, Some(0), "{}", bridge.log());
+    let mut cell = Cell::start("hotwire").await;
+    cell.cut("sigint").await;
+    cell.stop_bridge_with("INT").await;
     // The process is gone: whatever the machine does now, it was left that way.
-    assert!(
-        bridge.log().contains("heat off confirmed"),
-        "the bridge read the heat back before exiting:\n{}",
-        bridge.log()
-    );
-    assert_safe(&sim, &addr, "after SIGINT").await;
+    assert_safe(&cell.sim, &cell.addr, "after SIGINT").await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn sigterm_while_held_counts_as_running_and_switches_the_heat_off() {
-    let dir = tempfile::tempdir().unwrap();
-    let (sim, file) = grbl_sim(dir.path(), "held", Faults::default(), 2.0, "").await;
-    let addr = address_in(&file);
-    let domain = fresh_domain();
-    let mut bridge = BridgeProcess::start(dir.path(), domain, &file);
-    let op = operator(domain).await;
-    start_goal(&op, goal(&grbl_program("sigterm-hold", 400), "")).await;
-    cutting(&sim).await;
+    let mut cell = Cell::start("held").await;
+    cell.cut("sigterm-hold").await;
+    let op = &cell.op;
     let service = op
         .node
-        .service_client::<SendMachineCommandRequest, SendMachineCommandResponse>(
-            "/machine_command",
-        )
+        .service_client::<SendMachineCommandRequest, SendMachineCommandResponse>("/machine_command")
         .unwrap();
     assert!(
         op.node
@@ -220,41 +245,35 @@ async fn sigterm_while_held_counts_as_running_and_switches_the_heat_off() {
         .await
         .expect("the bridge answers");
     assert!(held.success, "{}", held.message);
-    sim.wait_for(DELIVERY_TIMEOUT, |s| s.state == MachineState::Hold(0))
+    cell.sim
+        .wait_for(DELIVERY_TIMEOUT, |s| s.state == MachineState::Hold(0))
         .await
         .expect("held");
     // A hold keeps the heat on (GRBL switches the spindle off in a hold only with a door or
     // laser mode): the stop must not trust it.
-    assert!(sim.snapshot().spindle_on, "held with the heat on");
-    bridge.signal("TERM");
-    assert_eq!(bridge.exited().await, Some(0), "{}", bridge.log());
-    assert!(
-        bridge.log().contains("heat off confirmed"),
-        "{}",
-        bridge.log()
-    );
-    assert_safe(&sim, &addr, "after SIGTERM in a hold").await;
+    assert!(cell.sim.snapshot().spindle_on, "held with the heat on");
+    cell.stop_bridge_with("TERM").await;
+    assert_safe(&cell.sim, &cell.addr, "after SIGTERM in a hold").await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_bridge_killed_mid_program_is_followed_by_one_that_finds_the_heat_on_and_stops_it() {
-    let dir = tempfile::tempdir().unwrap();
-    let (sim, file) = grbl_sim(dir.path(), "orphan", Faults::default(), 2.0, "").await;
-    let addr = address_in(&file);
-    let domain = fresh_domain();
-    let mut bridge = BridgeProcess::start(dir.path(), domain, &file);
-    let op = operator(domain).await;
-    start_goal(&op, goal(&grbl_program("killed", 400), "")).await;
-    cutting(&sim).await;
+    let mut cell = Cell::start("orphan").await;
+    cell.cut("killed").await;
     // SIGKILL: no chance to stop anything. The controller runs on what its planner holds.
-    bridge.child.kill().unwrap();
-    let _ = bridge.exited().await;
-    assert!(sim.snapshot().spindle_on, "the heat is still on");
-    drop(op);
-    let restarted = BridgeProcess::start(dir.path(), fresh_domain(), &file);
-    sim.wait_for(DELIVERY_TIMEOUT, |s| !s.spindle_on)
+    cell.bridge.child.kill().unwrap();
+    let _ = cell.bridge.exited().await;
+    assert!(cell.sim.snapshot().spindle_on, "the heat is still on");
+    let restarted = BridgeProcess::start(cell.dir.path(), fresh_domain(), &cell.file);
+    cell.sim
+        .wait_for(DELIVERY_TIMEOUT, |s| !s.spindle_on)
         .await
-        .unwrap_or_else(|s| panic!("the new bridge left the heat on: {s:?}\n{}", restarted.log()));
+        .unwrap_or_else(|s| {
+            panic!(
+                "the new bridge left the heat on: {s:?}\n{}",
+                restarted.log()
+            )
+        });
     // Give its log a moment to arrive through the pipe.
     within(async {
         while !restarted.log().contains("heat off confirmed") {
@@ -262,35 +281,33 @@ async fn a_bridge_killed_mid_program_is_followed_by_one_that_finds_the_heat_on_a
         }
     })
     .await;
-    assert!(restarted.log().contains("found the machine"), "{}", restarted.log());
+    assert!(
+        restarted.log().contains("found the machine"),
+        "{}",
+        restarted.log()
+    );
     drop(restarted);
-    assert_safe(&sim, &addr, "after a killed bridge").await;
+    assert_safe(&cell.sim, &cell.addr, "after a killed bridge").await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_cancelled_goal_ends_canceled_with_the_heat_read_back_off() {
-    let dir = tempfile::tempdir().unwrap();
-    let (sim, file) = grbl_sim(dir.path(), "cancel", Faults::default(), 2.0, "").await;
-    let addr = address_in(&file);
-    let domain = fresh_domain();
-    let bridge = BridgeProcess::start(dir.path(), domain, &file);
-    let op = operator(domain).await;
-    let (goal_id, response) = within(
-        op.client
-            .async_send_goal(goal(&grbl_program("cancel", 400), "")),
-    )
-    .await
-    .expect("sent");
+    let cell = Cell::start("cancel").await;
+    let client = &cell.op.client;
+    let (goal_id, response) =
+        within(client.async_send_goal(goal(&grbl_program("cancel", 400), "")))
+            .await
+            .expect("sent");
     assert!(response.accepted);
     let result = cell_runtime::action::request_result(
-        &op.client,
+        client,
         goal_id,
         DELIVERY_TIMEOUT * 4,
         DELIVERY_TIMEOUT * 4,
     );
     let cancel = async {
-        cutting(&sim).await;
-        op.client.cancel_goal(goal_id).expect("cancel sent");
+        cutting(&cell.sim).await;
+        client.cancel_goal(goal_id).expect("cancel sent");
     };
     let (result, ()) = tokio::join!(result, cancel);
     let (status, result) = result.expect("result");
@@ -305,6 +322,9 @@ async fn a_cancelled_goal_ends_canceled_with_the_heat_read_back_off() {
         "{}",
         result.message
     );
+    let Cell {
+        sim, addr, bridge, ..
+    } = cell;
     drop(bridge);
     assert_safe(&sim, &addr, "after a cancel").await;
 }

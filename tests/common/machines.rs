@@ -208,4 +208,3 @@ pub fn goal(program: &MachineProgram, machine_id: &str) -> ExecuteProgramGoal {
         start_line: 0,
     }
 }
-

@@ -242,6 +242,11 @@ pub struct SimulatorConfig {
     pub baud: u32,
     /// Rapid rate of every axis (mm/min).
     pub rapid_mm_min: f64,
+    /// Which firmware the simulator speaks as: `grbl` (GRBL 1.1h, the default), `grblhal` or
+    /// `fluidnc` (banner, `$I`, buffer sizes, report rules).
+    pub firmware: SimulatorFirmware,
+    /// GRBL's laser mode (`$32=1`): the output fires only during feed moves.
+    pub laser_mode: bool,
 }
 
 impl Default for SimulatorConfig {
@@ -250,6 +255,32 @@ impl Default for SimulatorConfig {
             time_scale: 1.0,
             baud: 115_200,
             rapid_mm_min: 3000.0,
+            firmware: SimulatorFirmware::Grbl,
+            laser_mode: false,
+        }
+    }
+}
+
+/// The simulator's firmware, as written in the file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SimulatorFirmware {
+    /// GRBL 1.1h.
+    #[default]
+    Grbl,
+    /// grblHAL.
+    Grblhal,
+    /// FluidNC.
+    Fluidnc,
+}
+
+impl SimulatorFirmware {
+    /// The simulator's flavour.
+    pub fn flavour(self) -> cell_grbl::sim::SimFirmware {
+        match self {
+            SimulatorFirmware::Grbl => cell_grbl::sim::SimFirmware::Grbl11h,
+            SimulatorFirmware::Grblhal => cell_grbl::sim::SimFirmware::GrblHal,
+            SimulatorFirmware::Fluidnc => cell_grbl::sim::SimFirmware::FluidNc,
         }
     }
 }

@@ -15,8 +15,10 @@ use cell_grbl::stream::{
 use cell_grbl::transport::Connect;
 use cell_msgs::{ExecuteProgramResult as R, MachineCommand, MachineProgram, MachineStatus};
 
-use crate::config::{EndpointConfig, GrblControllerConfig, ResumePolicy};
+use crate::config::{EndpointConfig, GrblControllerConfig, ResumePolicy, SimulatorFirmware};
 use crate::controller::{lock, JobInfo, RunOutcome};
+
+mod restore;
 
 /// One GRBL-class controller.
 pub struct GrblController {
@@ -57,13 +59,21 @@ impl GrblController {
     pub async fn start(cfg: GrblControllerConfig) -> std::io::Result<Arc<Self>> {
         let (connector, sim): (Arc<dyn Connect>, _) = match (&cfg.endpoint, cfg.endpoint()) {
             (EndpointConfig::Simulator(s), _) => {
+                let flavour = SimConfig::for_firmware(s.firmware.flavour());
                 let sim = cell_grbl::sim::start(SimConfig {
                     time_scale: s.time_scale,
                     baud: (s.baud > 0).then_some(s.baud),
-                    rx_buffer_bytes: cfg.rx_buffer_bytes,
+                    // GRBL 1.1's buffer is the file's; the larger firmwares keep their own
+                    // (the file's value is then the client's safe fallback).
+                    rx_buffer_bytes: if s.firmware == SimulatorFirmware::Grbl {
+                        cfg.rx_buffer_bytes
+                    } else {
+                        flavour.rx_buffer_bytes
+                    },
                     axes: cfg.axis_letters(),
                     rapid_mm_min: s.rapid_mm_min,
-                    ..SimConfig::default()
+                    laser_mode: s.laser_mode,
+                    ..flavour
                 });
                 let addr = sim.listen_tcp("127.0.0.1:0").await?;
                 let endpoint = cell_grbl::transport::Endpoint::Tcp(addr.to_string());
@@ -154,7 +164,8 @@ impl GrblController {
 
     /// The lines to send and the original line to start from, or why `program` cannot run
     /// here from `start_line` (0: the first): wrong dialect, machine profile or file count, text
-    /// that does not parse, no G-code line, a start line past the end. Nothing is sent.
+    /// that does not parse, no G-code line, a start line past the end or one whose machine state
+    /// a resume cannot restore ([`cell_grbl::resume`]). Nothing is sent.
     pub(crate) fn prepare(
         &self,
         program: &MachineProgram,
@@ -179,7 +190,9 @@ impl GrblController {
             let budget = self
                 .client()
                 .filter(|c| c.progress().borrow().connected)
-                .map_or(self.cfg.rx_buffer_bytes.saturating_sub(1), |c| c.rx_budget());
+                .map_or(self.cfg.rx_buffer_bytes.saturating_sub(1), |c| {
+                    c.rx_budget()
+                });
             if let Some(l) = parsed.lines().iter().find(|l| l.wire_len() > budget) {
                 return Err(format!(
                     "{}:{}: line is {} bytes on the wire; controller {} takes at most {budget} (its RX buffer less one): split it",
@@ -203,6 +216,9 @@ impl GrblController {
                 }
             }
         };
+        if let Some(why) = self.resume_refusal(&parsed, from) {
+            return Err(format!("{}: {why}", file.name));
+        }
         Ok((parsed, from))
     }
 
@@ -240,7 +256,11 @@ impl GrblController {
             parsed.len(),
         ));
         *lock(&self.last_fault) = None;
-        let outcome = self.run(&client, &parsed, from).await;
+        // An operator's resume: the state the program had at `from` goes first.
+        let outcome = match self.restore_state(&client, &parsed, from).await {
+            Ok(()) => self.run(&client, &parsed, from).await,
+            Err(stopped) => stopped,
+        };
         if matches!(outcome.outcome, R::OUTCOME_ALARM | R::OUTCOME_REJECTED_LINE) {
             *lock(&self.last_fault) = Some(outcome.message.clone());
         }
@@ -348,7 +368,8 @@ impl GrblController {
                     if self.abort_requested.load(Ordering::SeqCst) {
                         // Aborted while the link was down: stop on the new link.
                         let stop = client.safe_stop().await;
-                        break self.failed(program, 
+                        break self.failed(
+                            program,
                             &StreamError {
                                 fault: Fault::Aborted,
                                 safe_stop: Some(Box::new(stop)),
@@ -443,7 +464,8 @@ impl GrblController {
             let acked_index = last_acked.and_then(|a| program.index_of_line(a));
             match (pending, acked_index) {
                 (Some(n), Some(i)) if n > 0 => {
-                    let texts: Vec<&str> = program.lines().iter().map(|l| l.text.as_str()).collect();
+                    let texts: Vec<&str> =
+                        program.lines().iter().map(|l| l.text.as_str()).collect();
                     let at = cell_grbl::resume_point::first_unfinished(&texts, i, n.into());
                     resume_at = program.lines().get(at).map(|l| l.number as u32);
                     message.push_str(&format!(
@@ -609,7 +631,12 @@ impl GrblController {
 /// The controller reports motion or a paused motion (hold and door count: a `~` would go on).
 fn machine_moving(client: &GrblClient) -> bool {
     matches!(
-        client.progress().borrow().status.as_ref().and_then(|s| s.state),
+        client
+            .progress()
+            .borrow()
+            .status
+            .as_ref()
+            .and_then(|s| s.state),
         Some(
             MachineState::Run
                 | MachineState::Jog

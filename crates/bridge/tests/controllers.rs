@@ -136,3 +136,128 @@ async fn controller_commands_in_a_program_are_refused_before_anything_is_sent() 
         "{err}"
     );
 }
+
+/// An operator's resume after an abort: the controller, reset by the safe stop, gets the
+/// program's state back before the resumed line (the G93 feed mode and the wire heated as the
+/// program heated it, at the line's start point), and every line runs once. A start line whose
+/// state cannot be restored is refused before anything is sent, naming the line.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_operator_resume_restores_the_programs_state_before_the_resumed_line() {
+    use cell_grbl::protocol::MachineState;
+    use cell_msgs::MachineCommand;
+
+    let (sim, c, _dir) = grbl(Faults::default(), "").await;
+    let program = emitted("grbl-xyuv", "wing", "wing");
+    let sent = Program::parse(&program.files[0].text, CleanOptions::default()).unwrap();
+    let texts: Vec<String> = sent.lines().iter().map(|l| l.text.clone()).collect();
+    let run = {
+        let (c, program) = (c.clone(), program.clone());
+        tokio::spawn(async move { c.execute(&program, 0).await })
+    };
+    sim.wait_for(Duration::from_secs(120), |s| {
+        s.state == MachineState::Run && s.spindle_on && s.executed > texts.len() / 3
+    })
+    .await
+    .expect("the cut runs");
+    let abort = MachineCommand {
+        command: MachineCommand::COMMAND_ABORT,
+        ..MachineCommand::default()
+    };
+    c.command(&abort).await.unwrap();
+    let out = run.await.unwrap();
+    assert_eq!(out.outcome, R::OUTCOME_ABORTED, "{}", out.message);
+    let stopped = sim.executed_lines();
+    let done = stopped.len() - 1;
+    assert_eq!(stopped[..done], texts[..done], "the lines before the stop");
+    assert_eq!(stopped[done], "M5", "the safe stop's M5");
+    let reset = sim.parser_state();
+    assert_eq!(
+        (reset.feed_mode.as_str(), reset.spindle.as_str()),
+        ("G94", "M5")
+    );
+
+    let from = sent.lines()[done].number;
+    let out = tokio::time::timeout(Duration::from_secs(120), c.execute(&program, from as u32))
+        .await
+        .expect("finishes");
+    assert!(out.success, "{}", out.message);
+    let preamble = cell_grbl::resume::preamble(&sent, from).unwrap();
+    let heat_on = texts.iter().find(|t| t.starts_with("M3 S")).unwrap();
+    assert!(preamble.contains(heat_on), "{preamble:?}");
+    let log = sim.executed();
+    let expected: Vec<String> = texts[..done]
+        .iter()
+        .cloned()
+        .chain(["M5".to_string()])
+        .chain(preamble.iter().cloned())
+        .chain(texts[done..].iter().cloned())
+        .collect();
+    let got: Vec<String> = log.iter().map(|l| l.text.clone()).collect();
+    assert_eq!(
+        got, expected,
+        "the preamble before the resumed line; every line once"
+    );
+    // The resumed line runs in the state of the line before it in the first run.
+    let before = &log[done - 1].parser;
+    let resumed = &log[done + 1 + preamble.len()].parser;
+    let groups = |s: &cell_grbl::sim::ParserState| {
+        [
+            s.coordinate_system.clone(),
+            s.plane.clone(),
+            s.units.clone(),
+            s.distance.clone(),
+            s.feed_mode.clone(),
+            s.spindle.clone(),
+            s.spindle_speed.clone(),
+        ]
+    };
+    assert_eq!(groups(resumed), groups(before));
+    assert_eq!(
+        (resumed.feed_mode.as_str(), resumed.spindle.as_str()),
+        ("G93", "M3")
+    );
+
+    // An abort while the state is being restored ends the run there: the safe stop, and no
+    // program line.
+    let before_abort = sim.executed().len();
+    let run = {
+        let (c, program) = (c.clone(), program.clone());
+        tokio::spawn(async move { c.execute(&program, from as u32).await })
+    };
+    sim.wait_for(Duration::from_secs(120), |s| {
+        s.spindle_on && s.executed > before_abort
+    })
+    .await
+    .expect("the preamble switches the heat on");
+    c.command(&abort).await.unwrap();
+    let out = tokio::time::timeout(Duration::from_secs(120), run)
+        .await
+        .expect("the run ends")
+        .unwrap();
+    assert_eq!(out.outcome, R::OUTCOME_ABORTED, "{}", out.message);
+    let after: Vec<String> = sim.executed_lines().split_off(before_abort);
+    assert!(
+        after.iter().all(|l| preamble.contains(l) || l == "M5"),
+        "{after:?}"
+    );
+    assert_eq!(sim.parser_state().spindle, "M5");
+    assert!(!sim.snapshot().spindle_on);
+
+    // A state the resume cannot rebuild: a tool length offset before the start line.
+    let mut offset = program.clone();
+    let mut lines: Vec<&str> = offset.files[0].text.lines().collect();
+    lines.insert(3, "G43.1 Z1");
+    offset.files[0].text = lines.join("\n");
+    let why = c.check_program(&offset, 10).unwrap_err();
+    assert!(
+        why.starts_with(&format!(
+            "{}: cannot resume from line 10: line 4 (`G43.1 Z1`): G43.1",
+            offset.files[0].name
+        )),
+        "{why}"
+    );
+    let executed = sim.executed().len();
+    let out = c.execute(&offset, 10).await;
+    assert_eq!(out.outcome, R::OUTCOME_REFUSED, "{}", out.message);
+    assert_eq!(sim.executed().len(), executed, "nothing was sent");
+}

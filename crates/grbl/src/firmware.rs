@@ -130,7 +130,10 @@ mod tests {
         let b = parse_banner("Grbl 1.1h ['$' for help]").unwrap();
         assert_eq!((b.firmware, b.version.as_str()), (Firmware::Grbl, "1.1h"));
         let b = parse_banner("GrblHAL 1.1f ['$' or '$HELP' for help]").unwrap();
-        assert_eq!((b.firmware, b.version.as_str()), (Firmware::GrblHal, "1.1f"));
+        assert_eq!(
+            (b.firmware, b.version.as_str()),
+            (Firmware::GrblHal, "1.1f")
+        );
         let b = parse_banner("Grbl 3.7 [FluidNC v3.7.8 (wifi) '$' for help]").unwrap();
         assert_eq!(
             (b.firmware, b.version.as_str()),

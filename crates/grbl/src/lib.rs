@@ -6,6 +6,8 @@
 //!   the spindle word of `$G`.
 //! - [`protocol`]: real-time bytes, response and status-report parsing, error/alarm tables.
 //! - [`program`]: a program cleaned for streaming, with original line numbers kept.
+//! - [`resume`]: the machine state a program had at a line, and the lines that restore it
+//!   before a resume from there ([`words`] splits the lines into words).
 //! - [`resume_point`]: the line to resume from after a safe stop flushed the planner.
 //! - [`transport`]: TCP, serial, pty behind one trait.
 //! - [`stream`]: the streaming client ([`stream::GrblClient`]).
@@ -16,7 +18,9 @@
 pub mod firmware;
 pub mod program;
 pub mod protocol;
+pub mod resume;
 pub mod resume_point;
 pub mod sim;
 pub mod stream;
 pub mod transport;
+pub mod words;

@@ -55,9 +55,11 @@
 //! unknown (the `ok` may have been lost with the link). A controller that kept running (TCP
 //! controllers, a serial GRBL whose board did not reset) executes what its planner held, so
 //! the usual confirmed line is `last_acked_line + 1`; if the controller reset, its planner was
-//! lost and the operator must pick the line from the machine's position. The client re-sends
-//! exactly the lines from the confirmed one on, each once, and assumes the modal state (units,
-//! distance mode, feed, spindle) the controller holds is the one the program had there.
+//! lost and the operator must pick the line from the machine's position (after a safe stop,
+//! [`crate::resume_point`] counts back the moves the reset discarded). The client re-sends
+//! exactly the lines from the confirmed one on, each once; a resume after a reset first
+//! restores the program's modal state and position there ([`crate::resume::preamble`], which
+//! the bridge sends).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -918,6 +920,9 @@ impl GrblClient {
     async fn stop_sequence(&self, limits: StopLimits) -> SafeStopReport {
         let mut report = SafeStopReport::default();
         let mut rx = self.progress.clone();
+        // Only a report that answers a `?` sent after the hold counts: an `Idle` from before
+        // it (a dwell between two moves) would let the reset hit a moving machine.
+        let before_hold = rx.borrow().status_count + 1;
         if let Err(e) = self.hold().await {
             report.problems.push(format!("feed hold: {e}"));
             report.heat = HeatState::Unknown {
@@ -929,16 +934,17 @@ impl GrblClient {
         // 1. Wait for the hold to stop the machine.
         let stopped = self
             .poll_until(limits.hold, |p| {
-                matches!(
-                    p.status.as_ref().and_then(|s| s.state),
-                    Some(
-                        MachineState::Hold(0)
-                            | MachineState::Idle
-                            | MachineState::Alarm
-                            | MachineState::Door(_)
-                            | MachineState::Check
+                p.status_count > before_hold
+                    && matches!(
+                        p.status.as_ref().and_then(|s| s.state),
+                        Some(
+                            MachineState::Hold(0)
+                                | MachineState::Idle
+                                | MachineState::Alarm
+                                | MachineState::Door(_)
+                                | MachineState::Check
+                        )
                     )
-                )
             })
             .await;
         report.stopped_before_reset = stopped;

@@ -11,7 +11,7 @@ use std::time::Duration;
 use cell_grbl::program::{CleanOptions, Program};
 use cell_grbl::protocol::MachineState;
 use cell_grbl::sim::{Faults, SimConfig};
-use cell_grbl::stream::{ClientConfig, FlowControl, Fault, GrblClient, HeatState};
+use cell_grbl::stream::{ClientConfig, Fault, FlowControl, GrblClient, HeatState};
 use cell_grbl::transport::{Connect, ConnectFuture};
 use common::{in_process, program, WAIT};
 
@@ -38,7 +38,11 @@ async fn the_heat_is_read_from_the_controller_on_while_cutting_and_off_after_the
     client.abort().await.unwrap();
     let stop = streamer.await.unwrap().unwrap_err().safe_stop.unwrap();
     assert!(stop.heat.is_confirmed_off(), "{}", stop.summary());
-    assert!(stop.summary().contains("heat off confirmed ($G M5"), "{}", stop.summary());
+    assert!(
+        stop.summary().contains("heat off confirmed ($G M5"),
+        "{}",
+        stop.summary()
+    );
     assert!(!sim.snapshot().spindle_on);
 }
 
@@ -109,19 +113,16 @@ async fn a_line_longer_than_the_rx_buffer_is_refused_before_anything_is_sent() {
     }
     assert!(err.safe_stop.is_none(), "nothing was sent, nothing to stop");
     tokio::time::sleep(Duration::from_millis(500)).await;
-    assert!(sim.executed_lines().is_empty(), "not a line of the program ran");
+    assert!(
+        sim.executed_lines().is_empty(),
+        "not a line of the program ran"
+    );
 }
 
 #[tokio::test(start_paused = true)]
 async fn a_link_that_does_not_come_back_leaves_the_heat_state_unknown_and_says_so() {
     let p = program(300);
-    let sim_cfg = SimConfig {
-        faults: Faults {
-            drop_at_lines: vec![60],
-            ..Faults::default()
-        },
-        ..SimConfig::default()
-    };
+    let sim_cfg = dropping_at(60);
     let sim = cell_grbl::sim::start(sim_cfg);
     // The cable is cut at the drop: every later connection attempt fails.
     let cut = Arc::new(CutAfterFirst {
@@ -145,25 +146,26 @@ async fn a_link_that_does_not_come_back_leaves_the_heat_state_unknown_and_says_s
         "{}",
         stop.summary()
     );
-    assert!(stop.summary().contains("heat state unknown"), "{}", stop.summary());
+    assert!(
+        stop.summary().contains("heat state unknown"),
+        "{}",
+        stop.summary()
+    );
 }
 
 #[tokio::test(start_paused = true)]
 async fn after_a_drop_the_first_byte_on_the_new_link_is_the_feed_hold() {
     let p = program(300);
-    let sim_cfg = SimConfig {
-        faults: Faults {
-            drop_at_lines: vec![60],
-            ..Faults::default()
-        },
-        ..SimConfig::default()
-    };
+    let sim_cfg = dropping_at(60);
     let (sim, client) = in_process(sim_cfg, FlowControl::CharacterCounting).await;
     let err = client.stream(&p).await.unwrap_err();
     assert!(matches!(err.fault, Fault::LinkLost(_)), "{err}");
     let stop = client.reconnect_and_stop().await;
     assert!(stop.heat.is_confirmed_off(), "{}", stop.summary());
-    assert_eq!(stop.sent.first().map(String::as_str), Some("! (first byte on the new link)"));
+    assert_eq!(
+        stop.sent.first().map(String::as_str),
+        Some("! (first byte on the new link)")
+    );
     assert!(!sim.snapshot().spindle_on);
     assert!(matches!(
         sim.snapshot().state,
@@ -190,7 +192,22 @@ async fn the_rx_buffer_a_controller_reports_is_the_budget() {
     let fixed = GrblClient::connect(sim.connector(), ClientConfig::default())
         .await
         .unwrap();
-    assert_eq!(fixed.rx_budget(), 127, "the configured 128 without detection");
+    assert_eq!(
+        fixed.rx_budget(),
+        127,
+        "the configured 128 without detection"
+    );
+}
+
+/// A simulator whose link drops when G-code line `line` arrives.
+fn dropping_at(line: u64) -> SimConfig {
+    SimConfig {
+        faults: Faults {
+            drop_at_lines: vec![line],
+            ..Faults::default()
+        },
+        ..SimConfig::default()
+    }
 }
 
 /// A link whose cable is cut after the first connection.
@@ -214,5 +231,40 @@ impl Connect for CutAfterFirst {
 
     fn describe(&self) -> String {
         "a cut cable".into()
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_controller_that_resets_mid_program_is_recognised_by_its_banner_and_stopped() {
+    use cell_grbl::firmware::Firmware;
+    use cell_grbl::sim::SimFirmware;
+    for (flavour, firmware) in [
+        (SimFirmware::Grbl11h, Firmware::Grbl),
+        (SimFirmware::GrblHal, Firmware::GrblHal),
+        (SimFirmware::FluidNc, Firmware::FluidNc),
+    ] {
+        let p = program(300);
+        let sim_cfg = SimConfig {
+            faults: Faults {
+                reset_at_line: Some(60),
+                ..Faults::default()
+            },
+            ..SimConfig::for_firmware(flavour)
+        };
+        let (sim, client) = in_process(sim_cfg, FlowControl::CharacterCounting).await;
+        // Without a banner on reset the stream would wait for answers that never come.
+        let err = tokio::time::timeout(WAIT, client.stream(&p))
+            .await
+            .unwrap_or_else(|_| panic!("{flavour:?}: the stream hangs after the reset"))
+            .unwrap_err();
+        assert_eq!(err.fault, Fault::UnexpectedReset, "{flavour:?}: {err}");
+        assert_eq!(client.progress().borrow().firmware, Some(firmware));
+        let stop = err.safe_stop.expect("the safe stop ran");
+        assert!(
+            stop.heat.is_confirmed_off(),
+            "{flavour:?}: {}",
+            stop.summary()
+        );
+        assert!(!sim.snapshot().spindle_on, "{flavour:?}");
     }
 }

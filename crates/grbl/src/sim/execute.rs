@@ -9,7 +9,7 @@ use crate::protocol::MachineState;
 use super::gcode;
 use super::machine::Machine;
 use super::planner::LogLine;
-use super::SimEvent;
+use super::{ParserState, SimEvent};
 
 impl Machine {
     /// Answers the host now, or after the injected slow-ack delay
@@ -72,6 +72,7 @@ impl Machine {
             text: p.raw.clone(),
             seq: p.seq,
             connection: p.connection,
+            parser: ParserState::of(&modal),
         };
         if self.check_mode {
             self.modal = modal;
@@ -87,16 +88,22 @@ impl Machine {
             self.pending = Some(p);
             return false;
         }
+        let spindle_set =
+            (modal.spindle, modal.spindle_speed) != (self.modal.spindle, self.modal.spindle_speed);
         self.modal = modal;
         if action.moves.is_empty() {
             self.enqueue_marker(log);
+            if spindle_set {
+                self.spindle_set_at_rest();
+            }
         } else {
             let start = self.queue_end_position();
             self.enqueue_moves(start, action.moves, false, Some(log));
         }
         if action.program_end {
             self.overrides.reset();
-            self.emit("[MSG:Pgm End]");
+            let msg = self.cfg.firmware.message("Pgm End");
+            self.emit(&msg);
         }
         if action.pause {
             self.feed_hold();

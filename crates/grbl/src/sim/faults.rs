@@ -1,5 +1,5 @@
-//! Injected faults: link drops, a controller that freezes, alarms, forced errors and slow
-//! acknowledgements, each at a given G-code line and each firing once.
+//! Injected faults: link drops, a controller that freezes, alarms, forced errors, slow
+//! acknowledgements and a spontaneous reset, each at a given G-code line and each firing once.
 
 use crate::protocol::MachineState;
 
@@ -33,6 +33,10 @@ pub struct Faults {
     /// Simulated seconds the controller spends on each line before answering (slow acks). The
     /// protocol loop is busy meanwhile, as on a slow controller.
     pub ack_delay_s: f64,
+    /// When G-code line N has been received, the controller resets by itself (a brown-out, a
+    /// watchdog, electrical noise on the reset line): as at power-up, position zero, planner,
+    /// buffers and modal state lost, the banner printed; the link stays up.
+    pub reset_at_line: Option<u64>,
 }
 
 /// Which one-shot faults have fired.
@@ -43,6 +47,7 @@ pub(super) struct FiredFaults {
     pub(super) freeze: bool,
     pub(super) alarm: bool,
     pub(super) error: bool,
+    pub(super) reset: bool,
 }
 
 impl Machine {
@@ -57,6 +62,11 @@ impl Machine {
         if self.cfg.faults.freeze_at_line == Some(p.seq) && !self.fired.freeze {
             self.fired.freeze = true;
             self.freeze();
+            return true;
+        }
+        if self.cfg.faults.reset_at_line == Some(p.seq) && !self.fired.reset {
+            self.fired.reset = true;
+            self.hardware_reset();
             return true;
         }
         if let Some((n, code)) = self.cfg.faults.error_at_line {
@@ -109,7 +119,8 @@ impl Machine {
         self.emit(&format!("ALARM:{code}"));
         if code == 1 || code == 2 {
             self.critical_lock = true;
-            self.emit("[MSG:Reset to continue]");
+            let msg = self.cfg.firmware.message("Reset to continue");
+            self.emit(&msg);
         }
     }
 }

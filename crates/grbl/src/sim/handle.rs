@@ -8,7 +8,7 @@ use tokio::sync::{mpsc, watch};
 use super::clock::SimClock;
 use super::link::Inbox;
 use super::record::Record;
-use super::{ExecutedLine, SimEvent, SimSnapshot};
+use super::{ExecutedLine, ParserState, SimEvent, SimSnapshot};
 
 /// Handle to a running simulator: attach hosts, read the executed-line log, the events and the
 /// machine state. Cloning gives another handle to the same simulator; dropping the last one stops
@@ -69,6 +69,13 @@ impl SimHandle {
     /// Most bytes ever waiting in the RX ring at once.
     pub fn rx_high_water(&self) -> usize {
         self.record().rx_high_water
+    }
+
+    /// The parser's modal state now (`$G`'s content) and its position. The parser runs ahead
+    /// of the motion by the planner's length; [`ExecutedLine::parser`] has the state right after
+    /// each executed line.
+    pub fn parser_state(&self) -> ParserState {
+        self.record().parser.clone()
     }
 
     /// The latest machine snapshot.

@@ -13,7 +13,7 @@ use tokio::time::Instant;
 
 use super::clock::SimClock;
 use super::machine::Machine;
-use super::{SimEvent, SimHandle, BANNER};
+use super::{OnConnect, SimEvent, SimHandle};
 
 /// What the host side tells the machine.
 pub(super) enum Inbox {
@@ -184,8 +184,13 @@ impl Machine {
                     connection,
                     at_s: self.t,
                 });
-                if self.cfg.banner_on_connect {
-                    self.emit(&format!("\r\n{BANNER}"));
+                match self.cfg.on_connect {
+                    OnConnect::Banner => {
+                        let banner = self.cfg.firmware.banner();
+                        self.emit(&format!("\r\n{banner}"));
+                    }
+                    OnConnect::Reset => self.hardware_reset(),
+                    OnConnect::Silent => {}
                 }
             }
             Inbox::Bytes {

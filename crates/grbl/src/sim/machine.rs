@@ -19,6 +19,7 @@ use super::link::{Inbox, Out};
 use super::overrides::Overrides;
 use super::planner::Entry;
 use super::record::Record;
+use super::report::ReportCounters;
 use super::rx::PendingLine;
 use super::{SimConfig, SimEvent, SimSnapshot};
 
@@ -69,7 +70,14 @@ pub(super) struct Machine {
     pub(super) hold_complete: bool,
     pub(super) jog_cancel: bool,
     pub(super) overrides: Overrides,
-    pub(super) reports: u64,
+    /// A completed hold switched the laser off (laser mode) until cycle start or reset.
+    pub(super) spindle_stopped: bool,
+    /// Laser mode, `M3`: the last move was a feed move, so the laser keeps its power at rest.
+    pub(super) laser_rest_on: bool,
+    /// `$N0`/`$N1` startup blocks (kept in EEPROM: they survive resets and connections).
+    pub(super) startup_lines: [String; 2],
+    /// When status reports carry `WCO:`, `Ov:` and `A:`.
+    pub(super) report: ReportCounters,
     // Faults.
     pub(super) fired: FiredFaults,
     pub(super) frozen: bool,
@@ -119,7 +127,10 @@ impl Machine {
             hold_complete: false,
             jog_cancel: false,
             overrides: Overrides::default(),
-            reports: 0,
+            spindle_stopped: false,
+            laser_rest_on: false,
+            startup_lines: Default::default(),
+            report: ReportCounters::default(),
             fired: FiredFaults::default(),
             frozen: false,
         }
@@ -262,6 +273,9 @@ impl Machine {
                 if self.pending.is_some() {
                     if self.try_execute() {
                         progressed = true;
+                        // Each line's spindle/coolant/offset change counts, even if the next
+                        // line undoes it before a report.
+                        self.track_report_changes();
                     }
                 } else if self.read_line() {
                     progressed = true;
@@ -271,6 +285,7 @@ impl Machine {
                 break;
             }
         }
+        self.track_report_changes();
         let used = self.rx.len();
         let mut r = self.rec();
         r.rx_high_water = r.rx_high_water.max(used);

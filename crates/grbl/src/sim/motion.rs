@@ -131,6 +131,7 @@ impl Machine {
         }
         self.hold_complete = true;
         self.state = MachineState::Hold(0);
+        self.spindle_hold_complete();
         self.event(SimEvent::HoldComplete { at_s: self.t });
     }
 
@@ -148,6 +149,7 @@ impl Machine {
             MachineState::Idle => {
                 self.hold_complete = true;
                 self.state = MachineState::Hold(0);
+                self.spindle_hold_complete();
                 self.event(SimEvent::HoldComplete { at_s: self.t });
             }
             MachineState::Jog => self.jog_cancel(),

@@ -3,7 +3,7 @@
 
 use super::gcode::{Move, Speed};
 use super::machine::Machine;
-use super::ExecutedLine;
+use super::{ExecutedLine, ParserState};
 
 /// An entry in the execution queue (the planner plus the non-motion lines between its blocks).
 #[derive(Debug)]
@@ -18,6 +18,8 @@ pub(super) struct LogLine {
     pub(super) text: String,
     pub(super) seq: u64,
     pub(super) connection: u64,
+    /// The parser's state right after the line.
+    pub(super) parser: ParserState,
 }
 
 /// One planner block: a straight move or a whole arc.
@@ -98,6 +100,7 @@ impl Machine {
         if let Some(Entry::Motion(b)) = self.queue.pop_front() {
             self.planner_used -= 1;
             self.pos = b.target.clone();
+            self.spindle_after_move(b.speed);
             if let Some(l) = b.log {
                 self.log(l);
             }
@@ -119,6 +122,7 @@ impl Machine {
             seq: l.seq,
             connection: l.connection,
             at_s,
+            parser: l.parser,
         });
     }
 }

@@ -1,11 +1,12 @@
 //! Real-time commands, acted on as their byte arrives: status report, feed hold, cycle start
-//! (after the hold completes), soft reset (`ALARM:3` when reset in motion, the banner,
-//! `[MSG:'$H'|'$X' to unlock]`), jog cancel and the overrides.
+//! (after the hold completes), soft reset (`ALARM:3` when reset in motion, the firmware's
+//! banner, `[MSG:'$H'|'$X' to unlock]` in alarm, then the `$N` startup blocks), jog cancel and
+//! the overrides. A hardware reset (an Arduino's port opening) is here too.
 
 use crate::protocol::{MachineState, Realtime};
 
 use super::machine::Machine;
-use super::{SimEvent, BANNER};
+use super::SimEvent;
 
 impl Machine {
     /// Acts on a real-time command as it arrives.
@@ -25,6 +26,8 @@ impl Machine {
                 if self.hold_complete && matches!(self.state, MachineState::Hold(_)) {
                     self.hold = None;
                     self.hold_complete = false;
+                    // The laser a hold switched off comes back with the motion.
+                    self.spindle_stopped = false;
                     self.state = if self.queue.is_empty() {
                         MachineState::Idle
                     } else {
@@ -62,18 +65,7 @@ impl Machine {
             in_motion,
             at_s: self.t,
         });
-        self.flush_motion();
-        self.rx.clear();
-        self.clear_line();
-        self.pending = None;
-        self.delayed.clear();
-        self.busy_until = self.t;
-        self.hold = None;
-        self.hold_complete = false;
-        self.jog_cancel = false;
-        self.check_mode = false;
-        self.overrides.reset();
-        self.modal = self.modal.reset(self.pos.clone());
+        self.clear_controller();
         if in_motion {
             self.state = MachineState::Alarm;
             self.event(SimEvent::Alarm {
@@ -86,9 +78,50 @@ impl Machine {
         if self.state != MachineState::Alarm {
             self.state = MachineState::Idle;
         }
-        self.emit(&format!("\r\n{BANNER}"));
+        self.start_up();
+    }
+
+    /// A hardware reset (an Arduino's DTR when the port opens): the controller starts from
+    /// power-up, position zero, work offsets and startup blocks kept (EEPROM), no alarm.
+    pub(super) fn hardware_reset(&mut self) {
+        self.event(SimEvent::HardwareReset { at_s: self.t });
+        self.clear_controller();
+        self.pos = vec![0.0; self.cfg.axes.len()];
+        self.modal.position = self.pos.clone();
+        self.critical_lock = false;
+        self.state = MachineState::Idle;
+        self.start_up();
+    }
+
+    /// Motion, buffers, overrides and parser state back to their reset values.
+    fn clear_controller(&mut self) {
+        self.flush_motion();
+        self.rx.clear();
+        self.clear_line();
+        self.pending = None;
+        self.delayed.clear();
+        self.busy_until = self.t;
+        self.hold = None;
+        self.hold_complete = false;
+        self.jog_cancel = false;
+        self.check_mode = false;
+        self.overrides.reset();
+        self.spindle_stopped = false;
+        self.laser_rest_on = false;
+        self.modal = self.modal.reset(self.pos.clone());
+        self.reset_report_counters();
+    }
+
+    /// What the controller prints and runs as it starts: the banner, the unlock message in
+    /// alarm, else the `$N` startup blocks.
+    fn start_up(&mut self) {
+        let banner = self.cfg.firmware.banner();
+        self.emit(&format!("\r\n{banner}"));
         if self.state == MachineState::Alarm {
-            self.emit("[MSG:'$H'|'$X' to unlock]");
+            let msg = self.cfg.firmware.message("'$H'|'$X' to unlock");
+            self.emit(&msg);
+        } else {
+            self.run_startup_lines();
         }
     }
 }

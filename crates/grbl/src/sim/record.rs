@@ -3,6 +3,8 @@
 
 use crate::protocol::{MachineState, Realtime};
 
+use super::ParserState;
+
 /// One line the simulated machine executed.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExecutedLine {
@@ -14,6 +16,8 @@ pub struct ExecutedLine {
     pub connection: u64,
     /// Simulated time it took effect (s).
     pub at_s: f64,
+    /// The parser's state right after the line (what `$G` would have said then).
+    pub parser: ParserState,
 }
 
 /// Something notable that happened in the simulator, with its simulated time (s).
@@ -87,6 +91,20 @@ pub enum SimEvent {
         /// Time (s).
         at_s: f64,
     },
+    /// A hardware reset: a host attached to a board that resets when its port opens
+    /// ([`OnConnect::Reset`](super::OnConnect::Reset)).
+    HardwareReset {
+        /// Time (s).
+        at_s: f64,
+    },
+    /// A `$` line reached the line buffer (GRBL executes it as a system command: settings,
+    /// startup blocks, homing, jogging, ...).
+    SystemCommand {
+        /// The line as received.
+        line: String,
+        /// Time (s).
+        at_s: f64,
+    },
 }
 
 /// A snapshot of the simulated machine.
@@ -120,4 +138,6 @@ pub(super) struct Record {
     pub(super) events: Vec<SimEvent>,
     pub(super) rx_high_water: usize,
     pub(super) overflow_bytes: u64,
+    /// The parser's state now.
+    pub(super) parser: ParserState,
 }

@@ -1,10 +1,11 @@
-//! The RX side of the protocol: the 128-byte RX ring (127 usable bytes) and the 80-byte line
-//! buffer. Real-time bytes are picked off as they arrive and never stored; a byte arriving while
-//! the ring is full is lost, as on the AVR, and the loss is recorded. Characters move from the
-//! ring into the line buffer with GRBL's preprocessing: spaces, `/` and comments dropped, upper
-//! case, and an overflow flag that turns the line into `error:11`.
+//! The RX side of the protocol: the RX ring (GRBL: 128 bytes, 127 usable) and the line buffer
+//! (GRBL: 80 bytes). Real-time bytes are picked off as they arrive and never stored; a byte
+//! arriving while the ring is full is lost, as on the AVR, and the loss is recorded. Characters
+//! move from the ring into the line buffer with GRBL's preprocessing: spaces, `/` and comments
+//! dropped, upper case, and an overflow flag that turns the line into `error:11`. FluidNC
+//! instead keeps the first 254 bytes of a line as received and drops the rest without a word.
 
-use crate::protocol::{Realtime, LINE_BUFFER_SIZE};
+use crate::protocol::Realtime;
 
 use super::machine::Machine;
 use super::SimEvent;
@@ -59,6 +60,12 @@ impl Machine {
                 if is_gcode {
                     self.received += 1;
                 }
+                if stored.starts_with('$') {
+                    self.event(SimEvent::SystemCommand {
+                        line: raw.clone(),
+                        at_s: self.t,
+                    });
+                }
                 self.pending = Some(PendingLine {
                     stored,
                     raw,
@@ -67,6 +74,10 @@ impl Machine {
                     connection: self.connection,
                 });
                 return true;
+            }
+            let limit = self.cfg.firmware.line_buffer_size() - 1;
+            if !self.cfg.firmware.overflow_is_error() && self.raw.len() >= limit {
+                continue;
             }
             self.raw.push(c as char);
             if self.line_overflow || self.in_paren || self.in_semicolon {
@@ -82,7 +93,7 @@ impl Machine {
                 self.in_paren = true;
             } else if c == b';' {
                 self.in_semicolon = true;
-            } else if self.line.len() >= LINE_BUFFER_SIZE - 1 {
+            } else if self.line.len() >= limit {
                 self.line_overflow = true;
             } else {
                 self.line.push((c as char).to_ascii_uppercase());

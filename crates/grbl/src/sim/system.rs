@@ -1,13 +1,24 @@
-//! `$` commands: `$`, `$$`, `$#`, `$G`, `$I`, `$N`, `$X`, `$H` (`error:5`: homing is disabled),
-//! `$C`, `$SLP`, `$RST=`, `$J=` jogging and `$n=v` (only `$10`, the status mask, changes
-//! behaviour). Those that GRBL runs only when idle answer `error:8` otherwise.
+//! `$` commands: `$`, `$$`, `$#`, `$G`, `$I` (the firmware's build info), `$N` and `$Nx=line`
+//! (startup blocks: executed when stored and after every reset), `$X`, `$H` (`error:5`: homing
+//! is disabled), `$C`, `$SLP`, `$RST=$|#|*` (settings, offsets and startup blocks back to
+//! defaults, then a reset), `$J=` jogging and `$n=v` (`$10` status mask, `$30` spindle speed at
+//! full PWM and `$32` laser mode change behaviour). Those that GRBL runs only when idle answer
+//! `error:8` otherwise. Every `$` line is recorded ([`SimEvent::SystemCommand`]).
 
 use crate::protocol::MachineState;
 
 use super::gcode;
 use super::machine::Machine;
+use super::planner::LogLine;
 use super::report::fmt_pos;
 use super::rx::PendingLine;
+
+/// GRBL's `$N` slots.
+const STARTUP_LINES: usize = 2;
+/// GRBL's EEPROM line size: a longer startup block is `error:14`.
+const EEPROM_LINE_SIZE: usize = 80;
+/// `error:14`: line length exceeded.
+const LINE_LENGTH_EXCEEDED: u8 = 14;
 
 impl Machine {
     /// Runs a `$` command; false when it must wait (a jog with the planner full).
@@ -23,9 +34,7 @@ impl Machine {
         };
         match cmd {
             "$" => {
-                self.emit(
-                    "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]",
-                );
+                self.emit(self.cfg.firmware.help());
                 self.respond("ok".into());
             }
             "$$" => {
@@ -36,8 +45,8 @@ impl Machine {
                         (10, self.cfg.status_mask.to_string()),
                         (13, "0".to_string()),
                         (22, "0".to_string()),
-                        (30, "1000".to_string()),
-                        (32, "0".to_string()),
+                        (30, fmt_setting(self.cfg.spindle_max_rpm)),
+                        (32, u8::from(self.cfg.laser_mode).to_string()),
                         (110, format!("{:.3}", self.cfg.rapid_mm_min)),
                         (
                             120,
@@ -72,19 +81,22 @@ impl Machine {
             }
             "$I" => {
                 if need_idle(self) {
-                    self.emit("[VER:1.1h.20190830:cellsuite grbl_sim]");
-                    let opt = format!(
-                        "[OPT:V,{},{}]",
-                        self.cfg.planner_blocks, self.cfg.rx_buffer_bytes
+                    let lines = self.cfg.firmware.build_info(
+                        self.cfg.planner_blocks,
+                        self.cfg.rx_buffer_bytes,
+                        &self.cfg.axes,
                     );
-                    self.emit(&opt);
+                    for l in lines {
+                        self.emit(&l);
+                    }
                     self.respond("ok".into());
                 }
             }
             "$N" => {
                 if need_idle(self) {
-                    self.emit("$N0=");
-                    self.emit("$N1=");
+                    for (n, line) in self.startup_lines.clone().iter().enumerate() {
+                        self.emit(&format!("$N{n}={line}"));
+                    }
                     self.respond("ok".into());
                 }
             }
@@ -92,7 +104,8 @@ impl Machine {
                 if self.state == MachineState::Alarm {
                     self.state = MachineState::Idle;
                     self.critical_lock = false;
-                    self.emit("[MSG:Caution: Unlocked]");
+                    let msg = self.cfg.firmware.message("Caution: Unlocked");
+                    self.emit(&msg);
                 }
                 self.respond("ok".into());
             }
@@ -105,17 +118,27 @@ impl Machine {
                     } else {
                         MachineState::Idle
                     };
-                    self.emit(if self.check_mode {
-                        "[MSG:Enabled]"
+                    let msg = self.cfg.firmware.message(if self.check_mode {
+                        "Enabled"
                     } else {
-                        "[MSG:Disabled]"
+                        "Disabled"
                     });
+                    self.emit(&msg);
                     self.respond("ok".into());
                 }
             }
             "$SLP" => self.respond("ok".into()),
             _ if cmd.starts_with("$J=") => return self.jog(p),
-            _ if cmd.starts_with("$RST=") => self.respond("ok".into()),
+            _ if cmd.starts_with("$RST=") => {
+                if need_idle(self) {
+                    self.restore(p);
+                }
+            }
+            _ if startup_slot(cmd).is_some() => {
+                if let Some((n, line)) = startup_slot(cmd) {
+                    self.store_startup_line(p, n, line);
+                }
+            }
             _ => {
                 let setting = cmd[1..]
                     .split_once('=')
@@ -123,8 +146,11 @@ impl Machine {
                 match setting {
                     Some((n, v)) => {
                         if need_idle(self) {
-                            if n == 10 && (0.0..=255.0).contains(&v) {
-                                self.cfg.status_mask = v as u8;
+                            match n {
+                                10 if (0.0..=255.0).contains(&v) => self.cfg.status_mask = v as u8,
+                                30 => self.cfg.spindle_max_rpm = v,
+                                32 => self.cfg.laser_mode = v != 0.0,
+                                _ => {}
                             }
                             self.respond("ok".into());
                         }
@@ -159,4 +185,105 @@ impl Machine {
         self.respond("ok".into());
         true
     }
+}
+
+impl Machine {
+    /// `$RST=$` (settings), `$RST=#` (work offsets), `$RST=*` (everything, startup blocks
+    /// too): `[MSG:Restoring defaults]`, `ok`, then a reset as GRBL's `mc_reset`.
+    fn restore(&mut self, p: &PendingLine) {
+        let what = &p.stored["$RST=".len()..];
+        let (settings, offsets, startup) = match what {
+            "$" => (true, false, false),
+            "#" => (false, true, false),
+            "*" => (true, true, true),
+            _ => return self.error(&p.raw, 3),
+        };
+        if settings {
+            // GRBL's defaults.h for the settings the simulator models.
+            self.cfg.status_mask = 1;
+            self.cfg.spindle_max_rpm = 1000.0;
+            self.cfg.laser_mode = false;
+        }
+        if offsets {
+            let n = self.cfg.axes.len();
+            self.modal.offsets = std::array::from_fn(|_| vec![0.0; n]);
+        }
+        if startup {
+            self.startup_lines = Default::default();
+        }
+        let msg = self.cfg.firmware.message("Restoring defaults");
+        self.emit(&msg);
+        // Straight out: the reset right after would drop a delayed answer.
+        self.emit("ok");
+        self.soft_reset();
+    }
+
+    /// `$Nx=line`: GRBL executes the block to check it (so it takes effect now), then stores
+    /// it to run after every reset. Only when idle.
+    fn store_startup_line(&mut self, p: &PendingLine, n: usize, line: &str) {
+        if self.state != MachineState::Idle {
+            return self.error(&p.raw, 8);
+        }
+        if line.len() + 1 > EEPROM_LINE_SIZE {
+            return self.error(&p.raw, LINE_LENGTH_EXCEEDED);
+        }
+        // `$Nx=` with nothing after it clears the slot.
+        if line.is_empty() {
+            self.startup_lines[n].clear();
+            return self.respond("ok".into());
+        }
+        if let Err(code) = self.execute_block(line, p.connection) {
+            return self.error(&p.raw, code);
+        }
+        self.startup_lines[n] = line.to_string();
+        self.respond("ok".into());
+    }
+
+    /// Runs the stored startup blocks, each answered `>line:ok` or `>line:error:N`.
+    pub(super) fn run_startup_lines(&mut self) {
+        for line in self.startup_lines.clone() {
+            if line.is_empty() {
+                continue;
+            }
+            let status = match self.execute_block(&line, self.connection) {
+                Ok(()) => "ok".to_string(),
+                Err(code) => format!("error:{code}"),
+            };
+            self.emit(&format!(">{line}:{status}"));
+        }
+    }
+
+    /// Parses and applies a stored G-code block now (the planner is empty: idle), logging it.
+    fn execute_block(&mut self, line: &str, connection: u64) -> Result<(), u8> {
+        let (modal, action) = gcode::execute(&self.modal, line, &self.cfg.axes, false)?;
+        let log = LogLine {
+            text: line.to_string(),
+            seq: 0,
+            connection,
+            parser: super::ParserState::of(&modal),
+        };
+        self.modal = modal;
+        if action.moves.is_empty() {
+            self.enqueue_marker(log);
+            self.spindle_set_at_rest();
+        } else {
+            let start = self.queue_end_position();
+            self.enqueue_moves(start, action.moves, false, Some(log));
+        }
+        self.track_report_changes();
+        Ok(())
+    }
+}
+
+/// `$N0=line` → (0, line); `None` for anything else.
+fn startup_slot(cmd: &str) -> Option<(usize, &str)> {
+    let rest = cmd.strip_prefix("$N")?;
+    let (n, line) = rest.split_once('=')?;
+    let n: usize = n.parse().ok()?;
+    (n < STARTUP_LINES).then_some((n, line))
+}
+
+/// A speed setting as `$$` prints it (GRBL's `N_DECIMAL_RPMVALUE` is 0): `1000`.
+fn fmt_setting(v: f64) -> String {
+    format!("{v:.0}")
 }
