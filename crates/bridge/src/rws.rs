@@ -1,6 +1,25 @@
 //! An ABB robot behind the bridge, over Robot Web Services: upload and load the emitter's
 //! RAPID, move the program pointer to `main`, start, follow the execution state until RAPID
 //! stops. RWS reports no per-line progress here, so a run's feedback is 0 % until it ends.
+//!
+//! Every stop ends in the same safe stop (`rws/safe_stop.rs`: RAPID stopped, the controller
+//! file's heat-off outputs written, both read back) and says whether the heat is confirmed off:
+//! - **hold** stops RAPID (the program pointer stays) and switches the heat off. **Resume**
+//!   starts RAPID from the program pointer and switches nothing on: a `SetDO doWeld, 1` program
+//!   goes on without heat until it sets the output again (the rest of a weld run cut by the
+//!   hold is travelled cold), an `ArcL` program restarts its arc as the arc system does.
+//! - **abort** and **cancel** are checked before `start()` and race the upload: one that comes
+//!   while the program is uploaded or loaded ends the run before RAPID is started. During the
+//!   run they take effect within one poll, a hung poll included (polls, stop and I/O are
+//!   bounded by `timeouts.control_s`).
+//! - **a lost link** (three polls in a row fail) is answered with the safe stop, tried
+//!   `reconnect.attempts` times; the result says "heat off confirmed" or "heat state unknown"
+//!   and why. An unconfirmed stop is done again as soon as the controller answers.
+//! - **start-up and every reconnect** with no run of ours: a heat-off output that reads on
+//!   (a bridge killed mid-run, a link lost for longer than the retries) gets the safe stop
+//!   before anything else.
+
+mod safe_stop;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -10,12 +29,14 @@ use cell_msgs::{ExecuteProgramResult as R, MachineCommand, MachineProgram, Machi
 use cell_rws::{ControllerConfig, RwsClient};
 
 use crate::controller::{lock, JobInfo, RunOutcome};
+use safe_stop::SafeStop;
 
 /// How often the execution state is polled (RWS clients commonly poll at 5 Hz).
 const POLL: Duration = Duration::from_millis(200);
 
-/// Consecutive failed polls during a run after which the link counts as lost.
-const LOST_AFTER_FAILED_POLLS: u32 = 10;
+/// Consecutive failed polls during a run after which the link counts as lost (each fails
+/// within `timeouts.control_s`).
+const LOST_AFTER_FAILED_POLLS: u32 = 3;
 
 #[derive(Debug, Default, Clone)]
 struct Seen {
@@ -32,9 +53,21 @@ pub struct RwsController {
     client: Result<Arc<RwsClient>, String>,
     job: Mutex<Option<JobInfo>>,
     seen: Mutex<Seen>,
+    /// A run of ours is in progress (upload to end).
     busy: AtomicBool,
+    /// The current run's start request is on its way.
+    starting: AtomicBool,
+    /// The current run has started RAPID.
+    started: AtomicBool,
     held: AtomicBool,
     abort_requested: AtomicBool,
+    /// Wakes a run waiting on a request when an abort comes.
+    abort_signal: tokio::sync::Notify,
+    /// A safe stop could not be confirmed: done again when the controller answers.
+    pending_safe_stop: AtomicBool,
+    /// Held by a run from its start and by the start-up/reconnect heat check, so the check
+    /// never stops a run of ours.
+    gate: tokio::sync::Mutex<()>,
 }
 
 impl std::fmt::Debug for RwsController {
@@ -81,8 +114,13 @@ impl RwsController {
             job: Mutex::new(None),
             seen: Mutex::new(seen),
             busy: AtomicBool::new(false),
+            starting: AtomicBool::new(false),
+            started: AtomicBool::new(false),
             held: AtomicBool::new(false),
             abort_requested: AtomicBool::new(false),
+            abort_signal: tokio::sync::Notify::new(),
+            pending_safe_stop: AtomicBool::new(false),
+            gate: tokio::sync::Mutex::new(()),
         });
         if controller.client.is_ok() {
             tokio::spawn(poll_state(Arc::downgrade(&controller)));
@@ -132,7 +170,8 @@ impl RwsController {
     }
 
     /// Uploads, loads and runs `program` (RAPID modules and a `.pgf`) and follows it until
-    /// RAPID stops. `start_line` must be 0: RAPID programs start at `main`.
+    /// RAPID stops, or until an abort or a lost link ends it with the safe stop (module docs).
+    /// `start_line` must be 0: RAPID programs start at `main`.
     pub async fn execute(&self, program: &MachineProgram, start_line: u32) -> RunOutcome {
         let refuse = |message: String| RunOutcome::refused(message, self.status().state);
         if let Some(why) = self.refuse_reason(program, start_line) {
@@ -148,21 +187,74 @@ impl RwsController {
                 self.cfg.id
             ));
         }
+        let gate = self.gate.lock().await;
         self.abort_requested.store(false, Ordering::SeqCst);
+        self.started.store(false, Ordering::SeqCst);
         self.held.store(false, Ordering::SeqCst);
         let lines = program.line_count as usize;
         *lock(&self.job) = Some(JobInfo::new(program, lines, lines));
         let outcome = self.run(&client, program).await;
+        drop(gate);
         if let Some(job) = lock(&self.job).as_mut() {
             job.finished = Some(outcome.outcome);
             if outcome.success {
                 job.acked_lines = job.sent_lines;
             }
         }
+        self.started.store(false, Ordering::SeqCst);
         self.busy.store(false, Ordering::SeqCst);
         RunOutcome {
             final_state: self.status().state,
             ..outcome
+        }
+    }
+
+    /// Returns once an abort is requested (at once if it already is).
+    async fn abort_signalled(&self) {
+        loop {
+            if self.abort_requested.load(Ordering::SeqCst) {
+                return;
+            }
+            self.abort_signal.notified().await;
+        }
+    }
+
+    /// The safe stop, tried `reconnect.attempts` times; an unconfirmed one is left for the
+    /// state poll to do again.
+    async fn safe_stop_retrying(&self, client: &RwsClient, why: &str) -> SafeStop {
+        let id = &self.cfg.id;
+        let stop = safe_stop::retrying(
+            client,
+            &self.cfg.heat_off_outputs,
+            self.cfg.reconnect,
+            |attempt, unknown| {
+                let text = format!(
+                    "{why}: safe stop attempt {attempt} of {} not confirmed: {unknown}",
+                    self.cfg.reconnect.attempts
+                );
+                tracing::warn!("{id}: {text}");
+                lock(&self.seen).error = Some(text);
+            },
+        )
+        .await;
+        self.after_safe_stop(&stop);
+        stop
+    }
+
+    fn after_safe_stop(&self, stop: &SafeStop) {
+        self.pending_safe_stop
+            .store(!stop.confirmed(), Ordering::SeqCst);
+    }
+
+    fn ended(&self, outcome: u8, message: String) -> RunOutcome {
+        RunOutcome {
+            success: outcome == R::OUTCOME_FINISHED,
+            outcome,
+            message,
+            line: 0,
+            last_acked_line: 0,
+            reconnects: 0,
+            final_state: 0,
         }
     }
 
@@ -173,36 +265,62 @@ impl RwsController {
             .iter()
             .map(|f| (f.name.as_str(), f.text.as_bytes()))
             .collect();
-        let started = async {
+        let prepared = async {
             let installed = client.install_program(files).await?;
             client.set_pp_to_main().await?;
-            client.start().await?;
             Ok::<_, cell_rws::RwsError>(installed)
-        }
-        .await;
-        let installed = match started {
-            Ok(i) => i,
-            Err(e) => return RunOutcome::refused(format!("{id}: {e}"), 0),
         };
+        // An abort during the upload drops it (and its request) and RAPID is never started.
+        let prepared = tokio::select! {
+            biased;
+            () = self.abort_signalled() => None,
+            r = prepared => Some(r),
+        };
+        let installed = match prepared {
+            Some(Ok(i)) if !self.abort_requested.load(Ordering::SeqCst) => i,
+            Some(Err(e)) => return RunOutcome::refused(format!("{id}: {e}"), 0),
+            Some(Ok(_)) | None => return self.aborted_before_start(client).await,
+        };
+        self.starting.store(true, Ordering::SeqCst);
+        let start = client.start().await;
+        self.starting.store(false, Ordering::SeqCst);
+        match start {
+            Ok(()) => {}
+            // The controller said no (motors off, manual mode): nothing runs.
+            Err(e @ cell_rws::RwsError::Controller { .. }) => {
+                return RunOutcome::refused(format!("{id}: {e}"), 0)
+            }
+            // No answer: RAPID may have started.
+            Err(e) => {
+                return self
+                    .link_lost(client, format!("link lost while starting RAPID ({e})"))
+                    .await
+            }
+        }
+        self.started.store(true, Ordering::SeqCst);
         tracing::info!("{id}: running {}", installed.program);
         lock(&self.seen).running = true;
         let t0 = tokio::time::Instant::now();
         let mut failed_polls = 0u32;
         loop {
-            tokio::time::sleep(POLL).await;
-            if self.abort_requested.load(Ordering::SeqCst) {
-                let note = self.stop_and_heat_off(client).await;
-                return RunOutcome {
-                    success: false,
-                    outcome: R::OUTCOME_ABORTED,
-                    message: format!("{id}: aborted; {note}"),
-                    line: 0,
-                    last_acked_line: 0,
-                    reconnects: 0,
-                    final_state: 0,
-                };
-            }
-            match client.execution_state().await {
+            // An abort wakes the run at once, also out of a poll that hangs.
+            let polled = tokio::select! {
+                biased;
+                () = self.abort_signalled() => None,
+                r = async {
+                    tokio::time::sleep(POLL).await;
+                    client.execution_state().await
+                } => Some(r),
+            };
+            let Some(polled) = polled else {
+                let stop = self.safe_stop_retrying(client, "abort").await;
+                self.held.store(false, Ordering::SeqCst);
+                return self.ended(
+                    R::OUTCOME_ABORTED,
+                    format!("{id}: aborted; {}", stop.note()),
+                );
+            };
+            match polled {
                 Ok(s) => {
                     failed_polls = 0;
                     self.saw(Ok(s.is_running()));
@@ -226,21 +344,55 @@ impl RwsController {
                     failed_polls += 1;
                     self.saw(Err(e.to_string()));
                     if failed_polls >= LOST_AFTER_FAILED_POLLS {
-                        return RunOutcome {
-                            success: false,
-                            outcome: R::OUTCOME_LINK_LOST,
-                            message: format!(
-                                "{id}: {e}; {failed_polls} polls failed in a row while RAPID ran: check the robot"
-                            ),
-                            line: 0,
-                            last_acked_line: 0,
-                            reconnects: 0,
-                            final_state: 0,
-                        };
+                        let lost = format!(
+                            "link lost while RAPID ran ({failed_polls} polls failed in a row, the last: {e})"
+                        );
+                        return self.link_lost(client, lost).await;
                     }
                 }
             }
         }
+    }
+
+    /// A run whose link is gone: the safe stop, retried; the result says whether the heat is
+    /// confirmed off.
+    async fn link_lost(&self, client: &RwsClient, lost: String) -> RunOutcome {
+        let id = &self.cfg.id;
+        tracing::warn!("{id}: {lost}: stopping RAPID and switching the heat off");
+        lock(&self.seen).error = Some(format!("{lost}: stopping RAPID and switching the heat off"));
+        let stop = self.safe_stop_retrying(client, "link lost").await;
+        self.held.store(false, Ordering::SeqCst);
+        let check = if stop.confirmed() {
+            ""
+        } else {
+            "; check the robot: the bridge stops it and switches the heat off as soon as it answers"
+        };
+        self.ended(
+            R::OUTCOME_LINK_LOST,
+            format!("{id}: {lost}; {}{check}", stop.note()),
+        )
+    }
+
+    /// An abort that came before RAPID was started: nothing ran; the heat-off outputs are
+    /// still written (one may be on from before) and mastership given back.
+    async fn aborted_before_start(&self, client: &RwsClient) -> RunOutcome {
+        if client.holds_mastership() {
+            let release = client.release_mastership();
+            match tokio::time::timeout(self.cfg.timeouts.control(), release).await {
+                Ok(Ok(())) => {}
+                Ok(Err(e)) => tracing::warn!("{}: releasing mastership: {e}", self.cfg.id),
+                Err(_) => tracing::warn!("{}: releasing mastership: no answer", self.cfg.id),
+            }
+        }
+        let stop = self.safe_stop_retrying(client, "abort").await;
+        self.ended(
+            R::OUTCOME_ABORTED,
+            format!(
+                "{}: aborted before RAPID was started (nothing ran); {}",
+                self.cfg.id,
+                stop.note()
+            ),
+        )
     }
 
     fn saw(&self, state: Result<bool, String>) {
@@ -260,51 +412,83 @@ impl RwsController {
         }
     }
 
-    /// Stops RAPID and writes the heat-off outputs; says what was done.
-    async fn stop_and_heat_off(&self, client: &RwsClient) -> String {
-        let mut notes = Vec::new();
-        match client.stop().await {
-            Ok(()) => notes.push("RAPID stopped".to_owned()),
-            Err(e) => notes.push(format!("stop failed: {e}")),
-        }
-        for out in &self.cfg.heat_off_outputs {
-            match client.write_signal(&out.signal, &out.value).await {
-                Ok(()) => notes.push(format!("{} = {}", out.signal, out.value)),
-                Err(e) => notes.push(format!("{} not written: {e}", out.signal)),
-            }
-        }
-        self.held.store(false, Ordering::SeqCst);
-        notes.join(", ")
-    }
-
-    /// Hold stops RAPID (the program pointer stays), resume starts it from there, abort stops
-    /// it and writes the heat-off outputs. Overrides are not offered over RWS.
+    /// Hold stops RAPID (the program pointer stays) and switches the heat off; resume starts
+    /// RAPID from the program pointer and switches nothing on (module docs); abort ends a run
+    /// with the safe stop, or does the safe stop when nothing runs. An answer is an error when
+    /// the heat could not be confirmed off. Overrides are not offered over RWS.
     pub async fn command(&self, command: &MachineCommand) -> Result<String, String> {
         let id = &self.cfg.id;
         let client = self.client.as_ref().map_err(|e| format!("{id}: {e}"))?;
         match command.command {
             MachineCommand::COMMAND_HOLD => {
+                if self.busy.load(Ordering::SeqCst) && !self.started.load(Ordering::SeqCst) {
+                    return Err(format!(
+                        "{id}: hold: the program is still being uploaded and RAPID has not started; abort stops it before it starts"
+                    ));
+                }
+                // Held before the stop, so a run does not take the stop for its end.
                 self.held.store(true, Ordering::SeqCst);
-                client
-                    .stop()
-                    .await
-                    .map(|_| format!("{id}: RAPID stopped (hold)"))
-                    .map_err(|e| format!("{id}: hold: {e}"))
+                let stop = safe_stop::once(client, &self.cfg.heat_off_outputs).await;
+                self.after_safe_stop(&stop);
+                if !stop.rapid_stopped {
+                    self.held.store(false, Ordering::SeqCst);
+                }
+                let note = format!("{id}: hold: {}", stop.note());
+                if stop.confirmed() {
+                    tracing::info!("{note}");
+                    Ok(format!(
+                        "{note}; resume starts RAPID from the program pointer and switches nothing on (the program sets its outputs again)"
+                    ))
+                } else {
+                    tracing::warn!("{note}");
+                    Err(note)
+                }
             }
             MachineCommand::COMMAND_RESUME => {
                 let r = client.start().await;
                 if r.is_ok() {
                     self.held.store(false, Ordering::SeqCst);
                 }
-                r.map(|_| format!("{id}: RAPID started from the program pointer"))
-                    .map_err(|e| format!("{id}: resume: {e}"))
+                r.map(|_| {
+                    format!(
+                        "{id}: RAPID started from the program pointer; the heat stays off until the program switches it on again"
+                    )
+                })
+                .map_err(|e| format!("{id}: resume: {e}"))
             }
             MachineCommand::COMMAND_ABORT => {
                 if self.busy.load(Ordering::SeqCst) {
                     self.abort_requested.store(true, Ordering::SeqCst);
-                    Ok(format!("{id}: abort: the run stops within {POLL:?}"))
+                    self.abort_signal.notify_one();
+                    // The run stops too, but its task may not run again (a node shutting down,
+                    // or a caller that polls the run itself): the safe stop is done here as well.
+                    let mut stop = safe_stop::once(client, &self.cfg.heat_off_outputs).await;
+                    if self.starting.load(Ordering::SeqCst) {
+                        // A start request on its way may land after that stop.
+                        let deadline = tokio::time::Instant::now() + self.cfg.timeouts.control();
+                        while self.starting.load(Ordering::SeqCst)
+                            && tokio::time::Instant::now() < deadline
+                        {
+                            tokio::time::sleep(Duration::from_millis(20)).await;
+                        }
+                        stop = safe_stop::once(client, &self.cfg.heat_off_outputs).await;
+                    }
+                    self.after_safe_stop(&stop);
+                    let note = format!("{id}: abort: {}; the run ends", stop.note());
+                    if stop.confirmed() {
+                        Ok(note)
+                    } else {
+                        Err(note)
+                    }
                 } else {
-                    Ok(format!("{id}: {}", self.stop_and_heat_off(client).await))
+                    let stop = self.safe_stop_retrying(client, "abort").await;
+                    self.held.store(false, Ordering::SeqCst);
+                    let note = format!("{id}: abort: {}", stop.note());
+                    if stop.confirmed() {
+                        Ok(note)
+                    } else {
+                        Err(note)
+                    }
                 }
             }
             MachineCommand::COMMAND_FEED_OVERRIDE | MachineCommand::COMMAND_SPINDLE_OVERRIDE => {
@@ -338,7 +522,8 @@ impl RwsController {
             MachineStatus::STATE_DISCONNECTED
         } else if self.held.load(Ordering::SeqCst) {
             MachineStatus::STATE_HOLD
-        } else if seen.running {
+        } else if seen.running || self.busy.load(Ordering::SeqCst) {
+            // Uploading counts as running: a job of ours is under way.
             MachineStatus::STATE_RUNNING
         } else if job.and_then(|j| j.finished) == Some(R::OUTCOME_FINISHED) {
             MachineStatus::STATE_DONE
@@ -349,9 +534,12 @@ impl RwsController {
     }
 }
 
-/// Polls the execution state while no run does, so the status shows the robot's state.
+/// Polls the execution state while no run does, so the status shows the robot's state. On the
+/// first answer and on every answer after a failure it checks the heat first (module docs).
 async fn poll_state(controller: std::sync::Weak<RwsController>) {
     let mut logged: Option<String> = None;
+    let mut heat_logged: Option<String> = None;
+    let mut check_heat = true;
     loop {
         let Some(c) = controller.upgrade() else {
             return;
@@ -364,6 +552,9 @@ async fn poll_state(controller: std::sync::Weak<RwsController>) {
                         if logged.take().is_some() {
                             tracing::info!("{}: reachable again", c.cfg.id);
                         }
+                        if check_heat || c.pending_safe_stop.load(Ordering::SeqCst) {
+                            check_heat = !c.heat_check(client, &mut heat_logged).await;
+                        }
                     }
                     Err(e) => {
                         let why = e.to_string();
@@ -372,12 +563,55 @@ async fn poll_state(controller: std::sync::Weak<RwsController>) {
                             logged = Some(why.clone());
                         }
                         c.saw(Err(why));
+                        check_heat = true;
                     }
                 }
             }
         }
         drop(c);
         tokio::time::sleep(POLL).await;
+    }
+}
+
+impl RwsController {
+    /// With no run of ours: a safe stop left unconfirmed is done now, and a heat-off output
+    /// that reads on gets the safe stop. True when done: the heat reads off or is confirmed
+    /// off, or the outputs cannot be read (the next reconnect checks again); false to check
+    /// again at the next poll. `logged` keeps a failure from being logged at every poll.
+    async fn heat_check(&self, client: &RwsClient, logged: &mut Option<String>) -> bool {
+        let id = &self.cfg.id;
+        let mut warn_once = |text: String| {
+            if logged.as_deref() != Some(text.as_str()) {
+                tracing::warn!("{id}: {text}");
+                *logged = Some(text);
+            }
+        };
+        let Ok(_gate) = self.gate.try_lock() else {
+            return false;
+        };
+        if self.busy.load(Ordering::SeqCst) {
+            return false;
+        }
+        let why = if self.pending_safe_stop.load(Ordering::SeqCst) {
+            "the last safe stop was not confirmed".to_owned()
+        } else {
+            match safe_stop::heat_on(client, &self.cfg.heat_off_outputs).await {
+                Ok(None) => return true,
+                Ok(Some(on)) => format!("{on} with no run of this bridge"),
+                Err(e) => {
+                    warn_once(format!("heat check: {e}"));
+                    return true;
+                }
+            }
+        };
+        let stop = safe_stop::once(client, &self.cfg.heat_off_outputs).await;
+        self.after_safe_stop(&stop);
+        if stop.confirmed() {
+            tracing::warn!("{id}: {why}: {}", stop.note());
+        } else {
+            warn_once(format!("{why}: {}", stop.note()));
+        }
+        stop.confirmed()
     }
 }
 

@@ -8,7 +8,12 @@
 //! small session pool fills within seconds (abb-rws-client `core.ts`). A 401 later on means the
 //! session expired (controller restart, idle timeout): the client logs in again and repeats
 //! the request once; a second 401 is [`RwsError::Auth`]. A 401 means the request was not
-//! executed, so repeating a POST is safe.
+//! executed, so repeating a POST is safe. A Basic challenge over plain HTTP from another host
+//! is not answered ([`RwsError::InsecureAuth`]): the password would cross the network in clear.
+//!
+//! Timeouts: logins, uploads and program loads may take `timeouts.request_s`; the requests that
+//! drive and watch a run (start, stop, execution state, I/O) take at most `timeouts.control_s`,
+//! so a caller polling a dead link gets its error within one poll.
 
 use std::collections::BTreeMap;
 use std::sync::{Mutex, MutexGuard};
@@ -80,6 +85,12 @@ pub struct RwsClient {
     creds: Credentials,
     http: reqwest::Client,
     session: Mutex<Session>,
+    /// One login at a time: concurrent callers (a run, its poll, a hold) would otherwise
+    /// each open a session, and the second would drop the first's mastership.
+    login_lock: tokio::sync::Mutex<()>,
+    /// Why the TLS verifier last refused the controller's certificate.
+    #[cfg(feature = "tls")]
+    refused: crate::tls::RefusalSlot,
 }
 
 impl std::fmt::Debug for RwsClient {
@@ -123,20 +134,28 @@ impl RwsClient {
             .connect_timeout(cfg.timeouts.connect())
             .timeout(cfg.timeouts.request())
             .redirect(reqwest::redirect::Policy::none());
-        #[cfg(feature = "tls")]
-        let builder = builder.danger_accept_invalid_certs(cfg.accept_invalid_certs);
-        let http = builder.build().map_err(|e| RwsError::Transport {
+        let setup_error = |message: String| RwsError::Transport {
             controller: cfg.id.clone(),
             method: "",
             path: String::new(),
-            message: error_chain(&e),
-        })?;
+            message,
+        };
+        #[cfg(feature = "tls")]
+        let (builder, refused) = {
+            let pin = cfg.tls.as_ref().and_then(|t| t.pin_sha256);
+            let (tls, refused) = crate::tls::client_config(pin).map_err(setup_error)?;
+            (builder.use_preconfigured_tls(tls), refused)
+        };
+        let http = builder.build().map_err(|e| setup_error(error_chain(&e)))?;
         Ok(RwsClient {
             api: Api { version: cfg.rws },
             base: cfg.base_url(),
             creds,
             http,
             session: Mutex::new(Session::default()),
+            login_lock: tokio::sync::Mutex::new(()),
+            #[cfg(feature = "tls")]
+            refused,
             cfg,
         })
     }
@@ -149,6 +168,12 @@ impl RwsClient {
     /// How many logins this client has done (the first one included).
     pub fn logins(&self) -> u64 {
         self.session().logins
+    }
+
+    /// Whether this client believes it holds mastership (taken and not yet given back; a call
+    /// cancelled between taking and releasing it leaves it held).
+    pub fn holds_mastership(&self) -> bool {
+        self.session().mastership
     }
 
     fn session(&self) -> MutexGuard<'_, Session> {
@@ -165,6 +190,27 @@ impl RwsClient {
     /// # Errors
     /// [`RwsError::Auth`] when the controller refuses the credentials; transport errors.
     pub async fn login(&self) -> Result<(), RwsError> {
+        let _one = self.login_lock.lock().await;
+        self.open_session().await
+    }
+
+    /// Logs in unless logged in already; with `expired` (the login count a request was sent
+    /// under, answered 401), unless another caller has logged in again since.
+    async fn ensure_login(&self, expired: Option<u64>) -> Result<(), RwsError> {
+        let _one = self.login_lock.lock().await;
+        {
+            let s = self.session();
+            if s.logged_in && expired.is_none_or(|n| s.logins != n) {
+                return Ok(());
+            }
+        }
+        if expired.is_some() {
+            tracing::info!(controller = %self.cfg.id, "RWS session expired, logging in again");
+        }
+        self.open_session().await
+    }
+
+    async fn open_session(&self) -> Result<(), RwsError> {
         {
             let mut s = self.session();
             s.cookies.clear();
@@ -173,7 +219,8 @@ impl RwsClient {
             s.mastership = false;
         }
         let call = self.api.system();
-        let first = self.exchange(&call, None).await?;
+        let timeout = self.cfg.timeouts.request();
+        let first = self.exchange(&call, None, timeout).await?;
         if (200..300).contains(&first.status) {
             // No authentication asked for (a controller with open access).
             self.mark_logged_in(None);
@@ -208,11 +255,17 @@ impl RwsClient {
             })?;
             ("digest", answer.to_header_string())
         } else {
+            if self.base.starts_with("http://") && !self.cfg.is_loopback() {
+                return Err(RwsError::InsecureAuth {
+                    controller: self.cfg.id.clone(),
+                    url: self.base.clone(),
+                });
+            }
             let token = base64::engine::general_purpose::STANDARD
                 .encode(format!("{}:{}", self.creds.user, self.creds.password));
             ("basic", format!("Basic {token}"))
         };
-        let second = self.exchange(&call, Some(&header)).await?;
+        let second = self.exchange(&call, Some(&header), timeout).await?;
         if second.status == 401 {
             return Err(self.auth_error(scheme));
         }
@@ -253,7 +306,9 @@ impl RwsClient {
             return Ok(());
         }
         let call = self.api.logout();
-        let answer = self.exchange(&call, None).await?;
+        let answer = self
+            .exchange(&call, None, self.cfg.timeouts.control())
+            .await?;
         {
             let mut s = self.session();
             s.logged_in = false;
@@ -268,8 +323,14 @@ impl RwsClient {
         }
     }
 
-    /// One HTTP exchange, no login logic. `auth` overrides the session's `Authorization`.
-    async fn exchange(&self, call: &Call, auth: Option<&str>) -> Result<Answer, RwsError> {
+    /// One HTTP exchange, no login logic, answered within `timeout`. `auth` overrides the
+    /// session's `Authorization`.
+    async fn exchange(
+        &self,
+        call: &Call,
+        auth: Option<&str>,
+        timeout: Duration,
+    ) -> Result<Answer, RwsError> {
         let url = format!("{}{}", self.base, call.path);
         let method = match call.method {
             Method::Get => reqwest::Method::GET,
@@ -287,7 +348,7 @@ impl RwsClient {
             });
             (cookie, s.basic.clone())
         };
-        let mut req = self.http.request(method, &url);
+        let mut req = self.http.request(method, &url).timeout(timeout);
         if let Some(c) = cookie {
             req = req.header(reqwest::header::COOKIE, c);
         }
@@ -306,7 +367,7 @@ impl RwsClient {
         let resp = req
             .send()
             .await
-            .map_err(|e| self.transport_error(call, &e))?;
+            .map_err(|e| self.transport_error(call, &e, timeout))?;
         let status = resp.status().as_u16();
         let challenges = resp
             .headers()
@@ -328,7 +389,7 @@ impl RwsClient {
         let bytes = resp
             .bytes()
             .await
-            .map_err(|e| self.transport_error(call, &e))?;
+            .map_err(|e| self.transport_error(call, &e, timeout))?;
         tracing::trace!(controller = %self.cfg.id, method = call.method.as_str(), path = %call.path, status, "RWS");
         Ok(Answer {
             status,
@@ -337,13 +398,39 @@ impl RwsClient {
         })
     }
 
-    fn transport_error(&self, call: &Call, e: &reqwest::Error) -> RwsError {
+    fn transport_error(&self, call: &Call, e: &reqwest::Error, timeout: Duration) -> RwsError {
+        #[cfg(feature = "tls")]
+        if e.is_connect() {
+            let refusal = self
+                .refused
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .take();
+            let controller = self.cfg.id.clone();
+            match refusal {
+                Some(crate::tls::Refusal::Mismatch { expected, seen }) => {
+                    return RwsError::CertificatePin {
+                        controller,
+                        expected: expected.to_string(),
+                        seen: seen.to_string(),
+                    }
+                }
+                Some(crate::tls::Refusal::Untrusted { reason, seen }) => {
+                    return RwsError::CertificateUntrusted {
+                        controller,
+                        reason,
+                        seen: seen.to_string(),
+                    }
+                }
+                None => {}
+            }
+        }
         if e.is_timeout() {
             RwsError::Timeout {
                 controller: self.cfg.id.clone(),
                 method: call.method.as_str(),
                 path: call.path.clone(),
-                after: self.cfg.timeouts.request(),
+                after: timeout,
             }
         } else {
             RwsError::Transport {
@@ -366,16 +453,25 @@ impl RwsClient {
         }
     }
 
-    /// A request in the session: logs in first if needed, logs in again once on 401.
+    /// A request in the session, answered within `timeouts.request_s`: logs in first if
+    /// needed, logs in again once on 401.
     async fn send(&self, call: &Call) -> Result<String, RwsError> {
-        if !self.session().logged_in {
-            self.login().await?;
-        }
-        let mut answer = self.exchange(call, None).await?;
+        self.send_within(call, self.cfg.timeouts.request()).await
+    }
+
+    /// A request that drives or watches a run: as [`RwsClient::send`], answered within
+    /// `timeouts.control_s`.
+    async fn send_control(&self, call: &Call) -> Result<String, RwsError> {
+        self.send_within(call, self.cfg.timeouts.control()).await
+    }
+
+    async fn send_within(&self, call: &Call, timeout: Duration) -> Result<String, RwsError> {
+        self.ensure_login(None).await?;
+        let under = self.session().logins;
+        let mut answer = self.exchange(call, None, timeout).await?;
         if answer.status == 401 {
-            tracing::info!(controller = %self.cfg.id, "RWS session expired, logging in again");
-            self.login().await?;
-            answer = self.exchange(call, None).await?;
+            self.ensure_login(Some(under)).await?;
+            answer = self.exchange(call, None, timeout).await?;
             if answer.status == 401 {
                 let scheme = if self.session().basic.is_some() {
                     "basic"
@@ -565,7 +661,7 @@ impl RwsClient {
     /// `SYS_CTRL_E_EXEC_STATE` when already running, `SYS_CTRL_E_NO_PP` without a program
     /// pointer; on a real controller also motors off or manual mode.
     pub async fn start(&self) -> Result<(), RwsError> {
-        self.send(&self.api.start()).await.map(drop)
+        self.send_control(&self.api.start()).await.map(drop)
     }
 
     /// Stops RAPID.
@@ -573,7 +669,7 @@ impl RwsClient {
     /// # Errors
     /// Controller and transport errors.
     pub async fn stop(&self) -> Result<(), RwsError> {
-        self.send(&self.api.stop()).await.map(drop)
+        self.send_control(&self.api.stop()).await.map(drop)
     }
 
     /// Reads the execution state and cycle.
@@ -582,7 +678,7 @@ impl RwsClient {
     /// [`RwsError::Protocol`] if the answer has no `rap-execution` with `ctrlexecstate`.
     pub async fn execution_state(&self) -> Result<ExecutionState, RwsError> {
         let call = self.api.execution();
-        let body = self.send(&call).await?;
+        let body = self.send_control(&call).await?;
         let item = self.find_item(&call, &body, "rap-execution")?;
         let state = match field(&item, "ctrlexecstate").as_deref() {
             Some("running") => ExecState::Running,
@@ -633,7 +729,7 @@ impl RwsClient {
     pub async fn read_signal(&self, signal: &str) -> Result<String, RwsError> {
         check_signal(signal)?;
         let call = self.api.read_signal(signal);
-        let body = self.send(&call).await?;
+        let body = self.send_control(&call).await?;
         let item = self.find_item(&call, &body, "ios-signal")?;
         field(&item, "lvalue")
             .ok_or_else(|| self.protocol(&call, "no `lvalue` in ios-signal", &body))
@@ -647,7 +743,7 @@ impl RwsClient {
     /// value.
     pub async fn write_signal(&self, signal: &str, value: &str) -> Result<(), RwsError> {
         check_signal(signal)?;
-        self.send(&self.api.write_signal(signal, value))
+        self.send_control(&self.api.write_signal(signal, value))
             .await
             .map(drop)
     }

@@ -9,11 +9,21 @@
 //! # credentials: {file: /etc/cellsuite/irb2600.cred}   # or in this file (first line)
 //! task: T_ROB1                   # default
 //! program_dir: cellsuite         # under the controller's HOME; default
-//! timeouts: {connect_s: 5.0, request_s: 30.0}
+//! timeouts: {connect_s: 5.0, request_s: 30.0, control_s: 2.0}
+//! reconnect: {attempts: 5, delay_s: 1.0}   # stop + heat off after a lost link; default
 //! protocol: rws                  # optional; the machine bridge reads it
-//! heat_off_outputs:              # written after an abort; default none
+//! heat_off_outputs:              # written on hold, abort and a lost link; default none
 //!   - {signal: doWeld, value: "0"}
+//! # tls: {pin_sha256: "3A:04:…"} # https:// only: the controller certificate's SHA-256
 //! ```
+//!
+//! The password never crosses the network in clear: RobotWare 7 logs in with HTTP Basic, so
+//! `rws: rw7` needs an `https://` URL (or a controller on this host); the client also refuses
+//! a Basic challenge over plain HTTP from any other host ([`crate::RwsError::InsecureAuth`]).
+//! RobotWare 6's Digest login sends no password and may use `http://`. Over HTTPS the client
+//! accepts the certificate whose SHA-256 is `tls.pin_sha256` (OmniCore's own certificate is
+//! self-signed), else one a public root vouches for; the old `accept_invalid_certs` is refused
+//! with a pointer to the pin.
 //!
 //! Credentials never sit in the YAML: a `password` (or `user`) key anywhere in the file is
 //! refused with an error that says where to put it instead. The secret is `user:password`
@@ -27,6 +37,8 @@ use std::time::Duration;
 
 use cell_config::{Allowed, Bound, ParseError, Place, Problem};
 use serde::Deserialize;
+
+use crate::pin::CertPin;
 
 /// Which Robot Web Services generation the controller speaks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
@@ -169,8 +181,13 @@ impl CredentialsSource {
 pub struct Timeouts {
     /// TCP (and TLS) connect timeout, s.
     pub connect_s: f64,
-    /// Whole-request timeout (send and read the answer), s.
+    /// Whole-request timeout (send and read the answer) of logins, uploads and program
+    /// loads, s.
     pub request_s: f64,
+    /// Whole-request timeout of the requests that drive and watch a run (start, stop, the
+    /// execution state, I/O), s: short, so a poll that hangs on a dead link cannot keep an
+    /// abort or a safe stop waiting. At most 60.
+    pub control_s: f64,
 }
 
 impl Default for Timeouts {
@@ -178,6 +195,7 @@ impl Default for Timeouts {
         Timeouts {
             connect_s: 5.0,
             request_s: 30.0,
+            control_s: 2.0,
         }
     }
 }
@@ -191,6 +209,48 @@ impl Timeouts {
     pub fn request(&self) -> Duration {
         Duration::from_secs_f64(self.request_s)
     }
+    /// The run-control request timeout as a `Duration`.
+    pub fn control(&self) -> Duration {
+        Duration::from_secs_f64(self.control_s)
+    }
+}
+
+/// How hard a safe stop is tried when the link is lost during a run: RAPID stop and the
+/// heat-off outputs, read back, up to `attempts` times, `delay_s` apart.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Reconnect {
+    /// Attempts, 1 to 1000.
+    pub attempts: u32,
+    /// Pause between attempts, s.
+    pub delay_s: f64,
+}
+
+impl Default for Reconnect {
+    fn default() -> Self {
+        Reconnect {
+            attempts: 5,
+            delay_s: 1.0,
+        }
+    }
+}
+
+impl Reconnect {
+    /// The pause as a `Duration`.
+    pub fn delay(&self) -> Duration {
+        Duration::from_secs_f64(self.delay_s)
+    }
+}
+
+/// HTTPS settings (`tls:`), for an `https://` URL.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TlsConfig {
+    /// SHA-256 fingerprint of the controller's certificate (`AB:CD:…`, as `openssl x509
+    /// -noout -fingerprint -sha256` prints it): only that certificate is accepted. Without
+    /// it the certificate must chain to a public root.
+    #[serde(default)]
+    pub pin_sha256: Option<CertPin>,
 }
 
 fn default_task() -> String {
@@ -234,17 +294,21 @@ pub struct ControllerConfig {
     /// missing); empty means HOME itself.
     #[serde(default = "default_program_dir")]
     pub program_dir: String,
-    /// HTTPS only (feature `tls`): accept the controller's self-signed certificate. OmniCore
-    /// controllers ship one; prefer installing a proper certificate.
+    /// HTTPS settings: the pinned certificate.
     #[serde(default)]
-    pub accept_invalid_certs: bool,
+    pub tls: Option<TlsConfig>,
+    /// Retries of the safe stop after a lost link.
+    #[serde(default)]
+    pub reconnect: Reconnect,
     /// `rws` when given (the machine bridge's controller files name their protocol; a GRBL
     /// controller file says `grbl` and is not read by this crate).
     #[serde(default)]
     pub protocol: Option<String>,
-    /// Outputs written, in order, after a program is stopped by an abort, so the heat is off
-    /// even if RAPID stopped between a `SetDO doWeld, 1` and its `SetDO doWeld, 0`. Arc-welding
-    /// cells (`ArcL`) stop the arc with the program and need none.
+    /// Outputs written, in order, whenever RAPID is stopped by the bridge (hold, abort, cancel,
+    /// a lost link), and read back to confirm the heat is off: RAPID keeps a digital output
+    /// where it is when it stops, so a program stopped between its `SetDO doWeld, 1` and its
+    /// `SetDO doWeld, 0` would leave the weld power on. Arc-welding cells (`ArcL`) stop the
+    /// arc with the program and need none.
     #[serde(default)]
     pub heat_off_outputs: Vec<SignalValue>,
 }
@@ -377,6 +441,13 @@ impl ControllerConfig {
                 field,
             });
         }
+        if value.get("accept_invalid_certs").is_some() {
+            return Err(ConfigError::Invalid {
+                file: source_name.into(),
+                field: "accept_invalid_certs".into(),
+                reason: "no longer read (it accepted any certificate, a man in the middle's too): pin the controller's own certificate instead, `tls: {pin_sha256: \"AB:CD:…\"}` with its SHA-256 fingerprint (a mismatch names the one seen)".into(),
+            });
+        }
         let cfg: ControllerConfig = cell_config::from_yaml_str(text, source_name)?;
         cfg.check(source_name)?;
         Ok(cfg)
@@ -443,9 +514,22 @@ impl ControllerConfig {
                             .into(),
                     ));
                 }
+                if !https && self.rws == RwsVersion::Rw7 && !is_loopback_url(url) {
+                    return Err(invalid(
+                        "url",
+                        format!("{url:?}: rws: rw7 logs in with HTTP Basic, which would send the password in clear over http://; use https://")
+                            .into(),
+                    ));
+                }
             }
             (None, Some(0)) => return Err(invalid("port", "0 is not a port".into())),
             (None, Some(_)) => {}
+        }
+        if self.tls.is_some() && !self.base_url().starts_with("https://") {
+            return Err(invalid(
+                "tls",
+                "only for an https:// url (this controller is reached over plain HTTP)".into(),
+            ));
         }
         for (field, v) in [
             ("timeouts.connect_s", self.timeouts.connect_s),
@@ -455,6 +539,15 @@ impl ControllerConfig {
                 .check(v, "s")
                 .map_err(|e| invalid(field, e.into()))?;
         }
+        Allowed::between(Bound::Exclusive(0.0), Bound::Inclusive(60.0))
+            .check(self.timeouts.control_s, "s")
+            .map_err(|e| invalid("timeouts.control_s", e.into()))?;
+        Allowed::between(Bound::Inclusive(1.0), Bound::Inclusive(1000.0))
+            .check(f64::from(self.reconnect.attempts), "")
+            .map_err(|e| invalid("reconnect.attempts", e.into()))?;
+        Allowed::between(Bound::Inclusive(0.0), Bound::Inclusive(3600.0))
+            .check(self.reconnect.delay_s, "s")
+            .map_err(|e| invalid("reconnect.delay_s", e.into()))?;
         if self.task.trim().is_empty() {
             return Err(invalid("task", "empty".into()));
         }
@@ -486,6 +579,11 @@ impl ControllerConfig {
         Ok(())
     }
 
+    /// Whether the controller is on this host (`port:`, the simulator, or a loopback URL).
+    pub fn is_loopback(&self) -> bool {
+        is_loopback_url(&self.base_url())
+    }
+
     /// The base URL (no trailing slash).
     pub fn base_url(&self) -> String {
         match (&self.url, self.port) {
@@ -508,11 +606,27 @@ impl ControllerConfig {
             timeouts: Timeouts::default(),
             task: default_task(),
             program_dir: default_program_dir(),
-            accept_invalid_certs: false,
+            tls: None,
+            reconnect: Reconnect::default(),
             protocol: None,
             heat_off_outputs: Vec::new(),
         }
     }
+}
+
+/// Whether `url`'s host is this host: `localhost`, `127.0.0.0/8` or `[::1]`.
+pub(crate) fn is_loopback_url(url: &str) -> bool {
+    let rest = url.split_once("://").map_or(url, |(_, r)| r);
+    let authority = rest.split(['/', '?', '#']).next().unwrap_or_default();
+    let host_port = authority.rsplit_once('@').map_or(authority, |(_, h)| h);
+    let host = match host_port.strip_prefix('[') {
+        Some(v6) => v6.split(']').next().unwrap_or_default(),
+        None => host_port.split(':').next().unwrap_or_default(),
+    };
+    host.eq_ignore_ascii_case("localhost")
+        || host
+            .parse::<std::net::IpAddr>()
+            .is_ok_and(|ip| ip.is_loopback())
 }
 
 #[cfg(test)]
@@ -580,6 +694,68 @@ mod tests {
             let text = e.to_string();
             assert!(text.contains("must not be written in the configuration"), "{text}");
             assert!(!text.contains("robotics"), "{text}");
+        }
+    }
+
+    #[test]
+    fn run_timeouts_and_retries_are_checked() {
+        let cfg = ControllerConfig::from_yaml_str(
+            "id: r1\nport: 80\nrws: rw6\ncredentials: {env: X}\n",
+            "r1.yaml",
+        )
+        .unwrap();
+        assert_eq!(cfg.timeouts.control_s, 2.0);
+        assert_eq!(cfg.reconnect, Reconnect::default());
+        for (extra, field) in [
+            ("timeouts: {control_s: 0}", "timeouts.control_s"),
+            ("timeouts: {control_s: 120}", "timeouts.control_s"),
+            ("reconnect: {attempts: 0}", "reconnect.attempts"),
+            ("reconnect: {delay_s: -1}", "reconnect.delay_s"),
+        ] {
+            let e = ControllerConfig::from_yaml_str(
+                &format!("id: r1\nport: 80\nrws: rw6\ncredentials: {{env: X}}\n{extra}\n"),
+                "r1.yaml",
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.starts_with(&format!("r1.yaml: field `{field}`: ")),
+                "{extra}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn basic_login_over_plain_http_to_another_host_is_refused() {
+        let e = ControllerConfig::from_yaml_str(
+            "id: r7\nurl: http://192.168.125.1\nrws: rw7\ncredentials: {env: X}\n",
+            "r7.yaml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("r7.yaml: field `url`: ") && e.contains("in clear"),
+            "{e}"
+        );
+        // RWS 1.0 logs in with Digest; a controller on this host is not on the network.
+        for ok in [
+            "id: r6\nurl: http://192.168.125.1\nrws: rw6\ncredentials: {env: X}\n",
+            "id: r7\nport: 8080\nrws: rw7\ncredentials: {env: X}\n",
+            "id: r7\nurl: http://localhost:8080\nrws: rw7\ncredentials: {env: X}\n",
+        ] {
+            ControllerConfig::from_yaml_str(ok, "ok.yaml").unwrap();
+        }
+        for (url, local) in [
+            ("http://127.0.0.1:80", true),
+            ("http://127.1.2.3", true),
+            ("http://[::1]:8080/", true),
+            ("http://LOCALHOST", true),
+            ("http://user@localhost:1", true),
+            ("http://192.168.125.1", false),
+            ("http://localhost.example.com", false),
+            ("http://[::ffff:10.0.0.1]:80", false),
+        ] {
+            assert_eq!(is_loopback_url(url), local, "{url}");
         }
     }
 

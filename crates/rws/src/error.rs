@@ -221,6 +221,38 @@ pub enum RwsError {
         /// What was missing or wrong, with the start of the body.
         message: String,
     },
+    /// The controller presented another certificate than the one pinned in its controller
+    /// file (`tls.pin_sha256`): another machine answers at its address, or the controller's
+    /// certificate was replaced.
+    #[error("{controller}: the certificate presented is not the pinned one: expected SHA-256 {expected} (tls.pin_sha256), seen {seen}")]
+    CertificatePin {
+        /// Controller id.
+        controller: String,
+        /// The pin, as `AB:CD:…`.
+        expected: String,
+        /// The fingerprint of the certificate presented.
+        seen: String,
+    },
+    /// No pin is given and no public root vouches for the controller's certificate (an
+    /// OmniCore's own certificate is self-signed).
+    #[error("{controller}: the controller's certificate is not trusted ({reason}); if it is the controller's own certificate (check its SHA-256 on the controller), pin it in the controller file: tls: {{pin_sha256: \"{seen}\"}}")]
+    CertificateUntrusted {
+        /// Controller id.
+        controller: String,
+        /// Why rustls refused it.
+        reason: String,
+        /// The fingerprint of the certificate presented.
+        seen: String,
+    },
+    /// The controller asked for Basic authentication over plain HTTP to another host: the
+    /// password would cross the network in clear, so it is not sent.
+    #[error("{controller}: the controller asks for Basic authentication over plain HTTP ({url}), which would send the password in clear; use https:// (RobotWare 7 serves RWS over HTTPS; build with the `tls` feature)")]
+    InsecureAuth {
+        /// Controller id.
+        controller: String,
+        /// The controller's base URL.
+        url: String,
+    },
     /// An argument given to the client is unusable (e.g. a file name with a `/`).
     #[error("{what}: {message}")]
     BadInput {

@@ -17,10 +17,11 @@
 //!
 //! Modules: [`config`] (controller YAML and credentials), [`client`] ([`RwsClient`]),
 //! [`endpoints`] (every request per generation, with its sources), [`error`] ([`RwsError`],
-//! ABB return codes), [`sim`] (the simulator).
+//! ABB return codes), [`pin`] (the pinned certificate's fingerprint), [`sim`] (the simulator).
 //!
-//! HTTPS (needed for RobotWare 7 controllers) is the optional cargo feature `tls` (rustls);
-//! it is off by default.
+//! HTTPS (needed for RobotWare 7 controllers) is the optional cargo feature `tls` (rustls),
+//! off by default; with it the client pins the controller's certificate (`tls.pin_sha256`)
+//! and the simulator can serve HTTPS.
 
 #![warn(missing_docs)]
 
@@ -28,11 +29,15 @@ pub mod client;
 pub mod config;
 pub mod endpoints;
 pub mod error;
+pub mod pin;
 pub mod sim;
+#[cfg(feature = "tls")]
+mod tls;
 
 pub use client::{ExecState, ExecutionState, InstalledProgram, RwsClient};
 pub use config::{
-    ControllerConfig, Credentials, CredentialsSource, RwsVersion, SignalValue, SimulatorEndpoint,
-    Timeouts,
+    ControllerConfig, Credentials, CredentialsSource, Reconnect, RwsVersion, SignalValue,
+    SimulatorEndpoint, Timeouts, TlsConfig,
 };
 pub use error::{AbbStatus, RwsError};
+pub use pin::CertPin;

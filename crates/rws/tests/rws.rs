@@ -413,6 +413,26 @@ async fn logs_in_again_after_the_session_expires() {
     }
 }
 
+/// Callers that share a client (a run, its poll, a hold) and start at once open one session:
+/// a second login would replace the first's cookie and strand the mastership it holds.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_first_requests_log_in_once() {
+    for version in [RwsVersion::Rw6, RwsVersion::Rw7] {
+        let (sim, cfg, _dir) = setup(version).await;
+        let rws = std::sync::Arc::new(RwsClient::new(cfg).unwrap());
+        let polls: Vec<_> = (0..8)
+            .map(|_| {
+                let rws = rws.clone();
+                tokio::spawn(async move { rws.execution_state().await.map(drop) })
+            })
+            .collect();
+        for p in polls {
+            p.await.unwrap().unwrap();
+        }
+        assert_eq!((sim.logins(), rws.logins()), (1, 1), "{version}");
+    }
+}
+
 #[tokio::test]
 async fn lost_mastership_is_taken_again() {
     let (sim, cfg, _dir) = setup(RwsVersion::Rw6).await;

@@ -29,6 +29,16 @@
 //!   program pointer is then spent: `resetpp` again before the next start); `stop` stops.
 //! - **I/O.** A table of signals ([`SimConfig::signals`], `NETWORK/DEVICE/NAME`); RWS 1.0
 //!   also finds them by bare name. Digital signals (names starting `do`/`di`) take 0 or 1.
+//! - **Process outputs.** The simulator does not execute RAPID, but it keeps the one behaviour
+//!   that matters for heat: a program that switches a weld output with `SetDO doWeld, 1` has it
+//!   on while it runs. When RAPID starts (from `main` or resumed), every signal a loaded module
+//!   sets with `SetDO NAME, 1` goes to 1; when the run ends by itself (its last `SetDO NAME, 0`)
+//!   they go to 0; a `stop` leaves them where they are, as a real controller does.
+//! - **Faults.** [`RwsSim::stall`] keeps matching requests unanswered, as a cut cable or a hung
+//!   controller would; when the stall is lifted ([`RwsSim::answer_all`]) they are dropped
+//!   without effect (they never reached the controller) and new requests are served again.
+//! - **HTTPS** (feature `tls`): with `SimConfig::tls` it serves RWS over TLS with the given
+//!   certificate, as an OmniCore does.
 //!
 //! Errors come back as XHTML `<div class="status">` blocks, or as JSON when the request asked
 //! for JSON (`?json=1` on RWS 1.0, `Accept: application/hal+json` on RWS 2.0), in each
@@ -37,7 +47,6 @@
 pub mod rapid;
 
 use std::collections::{BTreeMap, BTreeSet, HashSet};
-use std::convert::Infallible;
 use std::net::SocketAddr;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
@@ -80,6 +89,19 @@ pub struct SimConfig {
     pub task: String,
     /// Signals as `NETWORK/DEVICE/NAME` and their initial values.
     pub signals: Vec<(String, String)>,
+    /// Serve HTTPS with this certificate and key instead of plain HTTP.
+    #[cfg(feature = "tls")]
+    pub tls: Option<SimTls>,
+}
+
+/// The simulator's HTTPS identity (feature `tls`).
+#[cfg(feature = "tls")]
+#[derive(Debug, Clone)]
+pub struct SimTls {
+    /// PEM certificate chain, the leaf first.
+    pub cert_pem: Vec<u8>,
+    /// PEM private key of the leaf (PKCS#8, SEC1 or PKCS#1).
+    pub key_pem: Vec<u8>,
 }
 
 impl SimConfig {
@@ -101,6 +123,8 @@ impl SimConfig {
                 .iter()
                 .map(|n| (format!("Local/DRV_1/{n}"), "0".to_owned()))
                 .collect(),
+            #[cfg(feature = "tls")]
+            tls: None,
         }
     }
 }
@@ -131,13 +155,25 @@ struct State {
     cycle: String,
     signals: BTreeMap<String, String>,
     requests: Vec<String>,
+    starts: u64,
 }
 
 /// A running simulator; stops when dropped.
 pub struct RwsSim {
     addr: SocketAddr,
+    https: bool,
     state: Arc<Mutex<State>>,
+    stall: Arc<Stall>,
     task: tokio::task::JoinHandle<()>,
+}
+
+/// [`RwsSim::stall`]'s state.
+#[derive(Default)]
+struct Stall {
+    /// Requests (`METHOD path?query`) starting with this are left unanswered.
+    prefix: tokio::sync::watch::Sender<Option<String>>,
+    /// How many are held now.
+    held: std::sync::atomic::AtomicUsize,
 }
 
 impl std::fmt::Debug for RwsSim {
@@ -174,6 +210,18 @@ impl RwsSim {
     /// # Errors
     /// The port could not be bound.
     pub async fn start_on(cfg: SimConfig, port: u16) -> std::io::Result<RwsSim> {
+        #[cfg(feature = "tls")]
+        let tls = match &cfg.tls {
+            Some(t) => Some(
+                crate::tls::acceptor(&t.cert_pem, &t.key_pem)
+                    .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?,
+            ),
+            None => None,
+        };
+        #[cfg(feature = "tls")]
+        let https = tls.is_some();
+        #[cfg(not(feature = "tls"))]
+        let https = false;
         let listener = tokio::net::TcpListener::bind(("127.0.0.1", port)).await?;
         let addr = listener.local_addr()?;
         let signals = cfg.signals.iter().cloned().collect();
@@ -194,30 +242,38 @@ impl RwsSim {
             running_until: None,
             signals,
             requests: Vec::new(),
+            starts: 0,
         }));
-        let shared = state.clone();
+        let stall = Arc::new(Stall::default());
+        let (shared, stall_shared) = (state.clone(), stall.clone());
         let task = tokio::spawn(async move {
             loop {
                 let Ok((stream, _)) = listener.accept().await else {
                     continue;
                 };
-                let state = shared.clone();
+                let (state, stall) = (shared.clone(), stall_shared.clone());
+                #[cfg(feature = "tls")]
+                let tls = tls.clone();
                 tokio::spawn(async move {
-                    let service = hyper::service::service_fn(move |req| {
-                        let state = state.clone();
-                        async move { Ok::<_, Infallible>(serve(&state, req).await) }
-                    });
-                    let io = hyper_util::rt::TokioIo::new(stream);
-                    if let Err(e) = hyper::server::conn::http1::Builder::new()
-                        .serve_connection(io, service)
-                        .await
-                    {
-                        tracing::debug!("rws_sim connection: {e}");
+                    #[cfg(feature = "tls")]
+                    if let Some(acceptor) = tls {
+                        match acceptor.accept(stream).await {
+                            Ok(secured) => serve_connection(secured, state, stall).await,
+                            Err(e) => tracing::debug!("rws_sim TLS handshake: {e}"),
+                        }
+                        return;
                     }
+                    serve_connection(stream, state, stall).await;
                 });
             }
         });
-        Ok(RwsSim { addr, state, task })
+        Ok(RwsSim {
+            addr,
+            https,
+            state,
+            stall,
+            task,
+        })
     }
 
     /// The address it listens on.
@@ -225,9 +281,52 @@ impl RwsSim {
         self.addr
     }
 
-    /// Its base URL, `http://127.0.0.1:PORT`.
+    /// Its base URL, `http://127.0.0.1:PORT` (`https://` when serving TLS).
     pub fn url(&self) -> String {
-        format!("http://{}", self.addr)
+        let scheme = if self.https { "https" } else { "http" };
+        format!("{scheme}://{}", self.addr)
+    }
+
+    /// Leaves every request whose `METHOD path?query` starts with `prefix` unanswered (`""`:
+    /// all of them), as a cut cable or a hung controller would, until [`RwsSim::answer_all`].
+    pub fn stall(&self, prefix: &str) {
+        self.stall.prefix.send_replace(Some(prefix.to_owned()));
+    }
+
+    /// How many requests a stall holds now.
+    pub fn stalled(&self) -> usize {
+        self.stall.held.load(std::sync::atomic::Ordering::SeqCst)
+    }
+
+    /// Lifts [`RwsSim::stall`]: the requests it held are dropped unanswered and without effect,
+    /// later ones are served.
+    pub fn answer_all(&self) {
+        self.stall.prefix.send_replace(None);
+    }
+
+    /// Whether RAPID runs now.
+    pub fn rapid_running(&self) -> bool {
+        let mut s = lock(&self.state);
+        s.tick();
+        s.running()
+    }
+
+    /// How many times RAPID was started.
+    pub fn starts(&self) -> u64 {
+        lock(&self.state).starts
+    }
+
+    /// Sets a signal by full path or bare name, as the process would (e.g. a weld output left
+    /// on); false if there is no such signal.
+    pub fn set_signal(&self, name: &str, value: &str) -> bool {
+        let mut s = lock(&self.state);
+        match s.find_signal(name, true) {
+            Some(key) => {
+                s.signals.insert(key, value.to_owned());
+                true
+            }
+            None => false,
+        }
     }
 
     /// Drops every session (and so mastership), as a controller restart would.
@@ -266,7 +365,8 @@ impl RwsSim {
         s.find_signal(name, true).map(|k| s.signals[&k].clone())
     }
 
-    /// Every request so far as `METHOD path?query`, in order.
+    /// Every request served so far as `METHOD path?query`, in order (not those a stall
+    /// dropped).
     pub fn requests(&self) -> Vec<String> {
         lock(&self.state).requests.clone()
     }
@@ -277,19 +377,72 @@ impl RwsSim {
     }
 }
 
-async fn serve(state: &Mutex<State>, req: Request<hyper::body::Incoming>) -> Response<Full<Bytes>> {
+/// Serves one HTTP/1.1 connection (plain or TLS).
+async fn serve_connection<I>(io: I, state: Arc<Mutex<State>>, stall: Arc<Stall>)
+where
+    I: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + Send + 'static,
+{
+    let service = hyper::service::service_fn(move |req| {
+        let (state, stall) = (state.clone(), stall.clone());
+        async move { serve(&state, &stall, req).await }
+    });
+    if let Err(e) = hyper::server::conn::http1::Builder::new()
+        .serve_connection(hyper_util::rt::TokioIo::new(io), service)
+        .await
+    {
+        tracing::debug!("rws_sim connection: {e}");
+    }
+}
+
+/// A request [`RwsSim::stall`] held and then dropped.
+#[derive(Debug)]
+struct Dropped;
+
+impl std::fmt::Display for Dropped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("request dropped by a stall")
+    }
+}
+
+impl std::error::Error for Dropped {}
+
+async fn serve(
+    state: &Mutex<State>,
+    stall: &Stall,
+    req: Request<hyper::body::Incoming>,
+) -> Result<Response<Full<Bytes>>, Dropped> {
     let (parts, body) = req.into_parts();
-    let body = match body.collect().await {
-        Ok(b) => b.to_bytes(),
-        Err(_) => Bytes::new(),
-    };
     let path_q = parts
         .uri
         .path_and_query()
         .map_or_else(|| "/".to_owned(), |p| p.as_str().to_owned());
+    let line = format!("{} {path_q}", parts.method);
+    let stalled = |p: &Option<String>| p.as_deref().is_some_and(|pre| line.starts_with(pre));
+    let mut watch = stall.prefix.subscribe();
+    if stalled(&watch.borrow_and_update()) {
+        /// Counts a held request for as long as it is held (also if hyper drops it).
+        struct Held<'a>(&'a std::sync::atomic::AtomicUsize);
+        impl Drop for Held<'_> {
+            fn drop(&mut self) {
+                self.0.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+            }
+        }
+        stall.held.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let _held = Held(&stall.held);
+        while stalled(&watch.borrow_and_update()) {
+            if watch.changed().await.is_err() {
+                break;
+            }
+        }
+        return Err(Dropped);
+    }
+    let body = match body.collect().await {
+        Ok(b) => b.to_bytes(),
+        Err(_) => Bytes::new(),
+    };
     let mut s = lock(state);
-    s.requests.push(format!("{} {path_q}", parts.method));
-    s.handle(parts.method.as_str(), &path_q, &parts.headers, &body)
+    s.requests.push(line);
+    Ok(s.handle(parts.method.as_str(), &path_q, &parts.headers, &body))
 }
 
 /// How to render an answer.
@@ -561,13 +714,33 @@ impl State {
         }
     }
 
-    /// Ends a run whose time is up.
+    /// Ends a run whose time is up: the program's last `SetDO NAME, 0` switches its process
+    /// outputs off.
     fn tick(&mut self) {
         if let Some(until) = self.running_until {
             if Instant::now() >= until {
                 self.running_until = None;
                 self.pp = false;
+                self.set_process_outputs("0");
             }
+        }
+    }
+
+    /// Sets every signal a loaded module switches on with `SetDO NAME, 1` to `value`.
+    fn set_process_outputs(&mut self, value: &str) {
+        let mut keys = Vec::new();
+        for m in &self.modules {
+            let Some(text) = self.files.get(&m.file) else {
+                continue;
+            };
+            for name in rapid::outputs_switched_on(&String::from_utf8_lossy(text)) {
+                if let Some(key) = self.find_signal(&name, true) {
+                    keys.push(key);
+                }
+            }
+        }
+        for key in keys {
+            self.signals.insert(key, value.to_owned());
         }
     }
 
@@ -1138,6 +1311,8 @@ impl State {
         }
         self.cycle = c.form["cycle"].clone();
         self.running_until = Some(Instant::now() + self.cfg.run_time);
+        self.starts += 1;
+        self.set_process_outputs("1");
         empty(204)
     }
 

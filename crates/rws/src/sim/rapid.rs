@@ -150,6 +150,32 @@ pub fn has_main(text: &[u8]) -> bool {
         .any(|w| w[0].1.eq_ignore_ascii_case("PROC") && w[1].1.eq_ignore_ascii_case("main"))
 }
 
+/// The signals the module switches on with `SetDO NAME, 1;` (outside comments), in order,
+/// each once: what the simulator turns on while the program runs.
+pub fn outputs_switched_on(text: &str) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for line in text.lines() {
+        let code = line.split('!').next().unwrap_or_default().trim();
+        let Some(args) = code
+            .get(..5)
+            .filter(|head| head.eq_ignore_ascii_case("SetDO"))
+            .map(|_| &code[5..])
+            .filter(|rest| rest.starts_with(char::is_whitespace))
+        else {
+            continue;
+        };
+        let args = args.trim().trim_end_matches(';');
+        let Some((name, value)) = args.split_once(',') else {
+            continue;
+        };
+        let name = name.trim();
+        if value.trim() == "1" && !name.is_empty() && !out.iter().any(|n| n == name) {
+            out.push(name.to_owned());
+        }
+    }
+    out
+}
+
 /// Identifier-like words with their 1-based line, comments (`!` to end of line) and string
 /// literals removed.
 fn tokenize(text: &str) -> Result<Vec<(usize, String)>, LoadFailure> {
@@ -245,5 +271,11 @@ mod tests {
         }
         let e = check_module("Job1.modx", GOOD.as_bytes(), RwsVersion::Rw6).unwrap_err();
         assert!(e.message.contains("not a module extension"), "{e:?}");
+    }
+
+    #[test]
+    fn finds_the_outputs_a_program_switches_on() {
+        let text = "MODULE W\n PROC main()\n  SetDO Local/DRV_1/doWeld, 0;\n  ! SetDO doLaser, 1;\n  SetDO Local/DRV_1/doWeld, 1;\n  SetDO doGas,1;\n  SetDO Local/DRV_1/doWeld, 1;\n ENDPROC\nENDMODULE\n";
+        assert_eq!(outputs_switched_on(text), ["Local/DRV_1/doWeld", "doGas"]);
     }
 }
