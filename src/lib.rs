@@ -24,6 +24,8 @@
 //! - `cell stream --controller ID|FILE --program FILE…` runs a program file on one controller
 //!   with a progress bar, through the machine bridge's controller code, without DDS (see
 //!   [`stream`]).
+//! - `cell machine status|hold|resume|abort|override [--machine ID]` talks to a running
+//!   `machine_bridge` node over DDS: its status topic and its command service (see [`machine`]).
 //! - `cell bag info BAG`, `cell bag repair BAG`, `cell bag to-rerun BAG --out FILE.rrd`:
 //!   rosbag2 MCAP bags (see [`bag`] and, for the Rerun conversion, [`bag_rerun`]); `cell bag
 //!   play BAG` republishes one over DDS with its recorded timing.
@@ -33,6 +35,7 @@ pub mod bag_rerun;
 pub mod emit;
 pub mod exit;
 pub mod hotwire;
+pub mod machine;
 pub mod rrd;
 pub mod sheet;
 pub mod slice;
@@ -141,6 +144,15 @@ enum Command {
     /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
     /// arguments or controller file, 65 a program the controller refuses.
     Stream(stream::StreamArgs),
+    /// Watch or stop a running machine_bridge node (its machine_status topic and its
+    /// machine_command service) without the ROS 2 command line: `cell machine status
+    /// [--follow]`, `cell machine hold|resume|abort [--machine ID]`, `cell machine override
+    /// --feed|--spindle PCT`. Reach a bridge in a namespace with `--ros-args -r __ns:=/cell`
+    /// last on the line; the domain is ROS_DOMAIN_ID's. Exit status: 0 done, 1 the bridge
+    /// refused or has no such controller, 64 bad arguments, 69 no bridge found or no answer
+    /// within --timeout.
+    #[command(subcommand)]
+    Machine(machine::MachineAction),
     /// Inspect, repair, convert or play a rosbag2 MCAP bag: `cell bag info BAG`, `cell bag
     /// repair BAG`, `cell bag to-rerun BAG --out FILE.rrd`, `cell bag play BAG`. Exit status: 64
     /// bad arguments, no such path or an output that cannot be written, 65 a bag that cannot be
@@ -204,6 +216,7 @@ pub fn main(argv: Vec<String>) -> ExitCode {
         Command::Wing(args) => wing::run(args),
         Command::Slice(args) => slice::run(args),
         Command::Stream(args) => stream::run(args),
+        Command::Machine(action) => machine::run(action),
         Command::Bag(command) => bag::run(command),
         Command::Launch { file, args } => run_launch(LaunchSource::File(file), args, None),
         Command::Demo {
