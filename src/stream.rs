@@ -139,10 +139,12 @@ async fn stream(spec: ControllerSpec, program: MachineProgram, args: &StreamArgs
             }
             name = &mut stop_signal, if !aborting => {
                 aborting = true;
-                bar.println(format!("{name}: aborting (hold, reset, heat off)"));
+                // `suspend`, not `println`: the lines must show when stderr is not a terminal
+                // (the bar is hidden then, and its `println` with it).
+                bar.suspend(|| eprintln!("{name}: aborting (hold, reset, heat off)"));
                 let abort = MachineCommand { machine_id: controller.id().into(), command: MachineCommand::COMMAND_ABORT, value: 0 };
                 match controller.command(&abort).await {
-                    Ok(m) | Err(m) => bar.println(m),
+                    Ok(m) | Err(m) => bar.suspend(|| eprintln!("{m}")),
                 }
             }
         }

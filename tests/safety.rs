@@ -328,3 +328,43 @@ async fn a_cancelled_goal_ends_canceled_with_the_heat_read_back_off() {
     drop(bridge);
     assert_safe(&sim, &addr, "after a cancel").await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cell_stream_stopped_by_sigterm_leaves_the_heat_read_back_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, file) = grbl_sim(dir.path(), "stream", Faults::default(), 2.0, "").await;
+    let addr = address_in(&file);
+    let program = grbl_program("stream-term", 400);
+    let ngc = dir.path().join("stream-term.ngc");
+    std::fs::write(&ngc, &program.files[0].text).unwrap();
+    let mut stream = Command::new(env!("CARGO_BIN_EXE_cell"))
+        .args(["stream", "--controller", &file, "--program"])
+        .arg(&ngc)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start cell stream");
+    cutting(&sim).await;
+    let ok = Command::new("kill")
+        .args(["-s", "TERM", &stream.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+    let out = within(async move {
+        tokio::task::spawn_blocking(move || {
+            let status = stream.wait().unwrap();
+            let mut err = String::new();
+            std::io::Read::read_to_string(&mut stream.stderr.take().unwrap(), &mut err).unwrap();
+            (status, err)
+        })
+        .await
+        .unwrap()
+    })
+    .await;
+    let (status, stderr) = out;
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("SIGTERM: aborting"), "{stderr}");
+    assert!(stderr.contains("heat off confirmed"), "{stderr}");
+    assert_safe(&sim, &addr, "after SIGTERM to cell stream").await;
+}

@@ -268,3 +268,66 @@ async fn a_controller_that_resets_mid_program_is_recognised_by_its_banner_and_st
         assert!(!sim.snapshot().spindle_on, "{flavour:?}");
     }
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_late_ok_on_a_new_link_is_not_taken_for_a_line_of_the_resumed_run() {
+    let p = program(300);
+    let sim = cell_grbl::sim::start(dropping_at(60));
+    // A USB-serial adapter that still held two `ok`s from the old link hands them out first on
+    // the new one.
+    let link = Arc::new(StaleBytesOnReconnect {
+        inner: sim.connector(),
+        connections: std::sync::atomic::AtomicU32::new(0),
+        stale: b"ok\r\nok\r\n",
+    });
+    let client = GrblClient::connect(link, ClientConfig::default())
+        .await
+        .unwrap();
+    let err = client.stream(&p).await.unwrap_err();
+    assert!(matches!(err.fault, Fault::LinkLost(_)), "{err}");
+    let acked = err.last_acked_line.expect("some lines were acknowledged");
+    client.reconnect().await.expect("the link is back");
+    // Resume after the last acknowledged line: if a stale `ok` answered one of the resumed
+    // lines, the client would count it sent and acknowledged twice over and the accounting
+    // (and the next resume) would skip a line.
+    let next = p.lines()[p.index_of_line(acked).unwrap() + 1].number;
+    let report = client.stream_from(&p, next).await.expect("the rest runs");
+    assert_eq!(report.last_line, p.lines().last().unwrap().number);
+    sim.wait_for(WAIT, |s| {
+        s.state == MachineState::Idle && s.planner_used == 0
+    })
+    .await
+    .unwrap();
+    assert_eq!(
+        sim.executed_lines(),
+        common::texts(&p),
+        "every line ran once, in order"
+    );
+}
+
+/// A link that, from the second connection on, first delivers `stale` bytes (answers from
+/// before the drop that a serial adapter still buffered).
+struct StaleBytesOnReconnect {
+    inner: Arc<dyn Connect>,
+    connections: std::sync::atomic::AtomicU32,
+    stale: &'static [u8],
+}
+
+impl Connect for StaleBytesOnReconnect {
+    fn connect(&self) -> ConnectFuture<'_> {
+        let n = self.connections.fetch_add(1, Ordering::SeqCst);
+        Box::pin(async move {
+            let link = self.inner.connect().await?;
+            if n == 0 {
+                return Ok(link);
+            }
+            let (read, write) = tokio::io::split(link);
+            let read = tokio::io::AsyncReadExt::chain(self.stale, read);
+            Ok(Box::new(tokio::io::join(read, write)) as cell_grbl::transport::BoxedTransport)
+        })
+    }
+
+    fn describe(&self) -> String {
+        "a serial adapter with stale bytes".into()
+    }
+}
