@@ -38,6 +38,11 @@
 //! without u, v are accepted only when they equal the primary ones. With `units: inch` every
 //! length is divided by 25.4.
 //!
+//! **Cutter compensation.** With `cutting.compensation: controller` (LinuxCNC), a sheet-cutting
+//! program selects tool 1 (`T1 M6`, its diameter the kerf) after the start lines, switches
+//! `G41`/`G42` on at each contour's entry move and `G40` after its lead-out
+//! ([`crate::compensation`]).
+//!
 //! **User text** (the job id) goes only into comments and `{job}` template placeholders,
 //! reduced to a safe character set, so no text can close a comment and inject a command.
 //!
@@ -51,7 +56,8 @@ use cell_profiles::{Dialect, ExtrusionMode, FeedMode, GcodeSettings, MachineProf
 use nalgebra::Vector2;
 
 use crate::arcs::{self, Primitive};
-use crate::EmitError;
+use crate::compensation::{self, Compensator};
+use crate::{EmitError, EmitOptions};
 
 /// One checked point of the program.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -122,16 +128,30 @@ pub fn extruded_length_mm(program: &str) -> f64 {
 }
 
 /// The G-code program for `toolpath` on `profile` (module docs). `job_id` goes into the header
-/// comment, sanitised.
+/// comment, sanitised. As [`emit_with`] with the default options.
 ///
 /// # Errors
 /// A profile without a `gcode` section; a non-finite value, a feed ≤ 0 or a per-point array of
 /// the wrong length (naming segment and point); an axis the profile does not map; a position
-/// outside the machine's travel; a line longer than the dialect allows.
+/// outside the machine's travel; a line longer than the dialect allows; with controller
+/// compensation, no kerf for the material or a contour without an entry move.
 pub fn emit(
     toolpath: &Toolpath,
     profile: &MachineProfile,
     job_id: &str,
+) -> Result<String, EmitError> {
+    emit_with(toolpath, profile, job_id, &EmitOptions::default())
+}
+
+/// As [`emit`], with the job's `options` (the material, for controller compensation's kerf).
+///
+/// # Errors
+/// As [`emit`].
+pub fn emit_with(
+    toolpath: &Toolpath,
+    profile: &MachineProfile,
+    job_id: &str,
+    options: &EmitOptions,
 ) -> Result<String, EmitError> {
     let g = profile
         .gcode
@@ -141,13 +161,25 @@ pub fn emit(
             section: "gcode",
         })?;
     let poses = poses(toolpath, profile, g)?;
+    let kerf_mm = compensation::controller_kerf_mm(toolpath, profile, options)?;
     let mut w = Writer::new(profile, g);
     w.start(job_id);
+    if let Some(kerf) = kerf_mm {
+        w.select_kerf_tool(kerf);
+        w.comp = Some(Compensator::new(toolpath, kerf));
+    }
     for run in poses.chunk_by(|a, b| a.segment == b.segment) {
+        let segment = run[0].segment;
+        if let Some(g40) = w.comp.as_mut().and_then(|c| c.before(segment)) {
+            w.push(g40.into());
+        }
         match run[0].kind {
             ToolpathSegment::KIND_TRAVEL => w.travel(run)?,
             ToolpathSegment::KIND_DEPOSIT if g.extrusion.is_some() => w.deposit(run)?,
             _ => w.powered(run)?,
+        }
+        if let Some(c) = w.comp.as_mut() {
+            c.after(segment, &mut w.lines)?;
         }
     }
     w.finish(job_id)
@@ -244,6 +276,8 @@ struct Writer<'a> {
     retracted: bool,
     /// Extrusion Z-hop in force (the nozzle is lifted by this much).
     lift: Option<f64>,
+    /// Controller cutter compensation, when the profile asks for it.
+    comp: Option<Compensator>,
 }
 
 impl<'a> Writer<'a> {
@@ -259,6 +293,31 @@ impl<'a> Writer<'a> {
             e_position: 0.0,
             retracted: false,
             lift: None,
+            comp: None,
+        }
+    }
+
+    /// Controller compensation: tool 1, whose diameter is the kerf (the tool table beside the
+    /// program), selected before the first move.
+    fn select_kerf_tool(&mut self, kerf_mm: f64) {
+        let unit = match self.g.units {
+            Units::Mm => "mm",
+            Units::Inch => "inch",
+        };
+        let note = self.comment(&format!(
+            "cutter compensation: G41/G42 with tool {}, diameter {} {unit} = the kerf, in {}",
+            compensation::TOOL,
+            self.coord(kerf_mm),
+            compensation::TOOL_TABLE_FILE
+        ));
+        self.push(note);
+        self.push(format!("T{} M6", compensation::TOOL));
+    }
+
+    /// Controller compensation: `G40` at the end of a contour.
+    fn compensation_off(&mut self) {
+        if let Some(g40) = self.comp.as_mut().and_then(Compensator::off) {
+            self.push(g40.into());
         }
     }
 
@@ -369,7 +428,14 @@ impl<'a> Writer<'a> {
         if self.at.as_ref().is_some_and(|(_, w)| *w == words) {
             return Ok(());
         }
+        let length_mm = self
+            .at
+            .as_ref()
+            .map_or(0.0, |(from, _)| (p.xy() - from.xy()).norm());
         self.push(format!("G0 {words}"));
+        if let Some(c) = self.comp.as_mut() {
+            c.rapid(self.lines.len() - 1, length_mm);
+        }
         self.at = Some((*p, words));
         Ok(())
     }
@@ -491,6 +557,17 @@ impl<'a> Writer<'a> {
         line += &self.s_suffix(p.power);
         line += &self.e_suffix(p, primary, extrude);
         self.push(line);
+        if let Some(c) = self.comp.as_mut() {
+            // An entry move qualifies by its length (a line) or its radius (an arc).
+            let size_mm = arc.map_or((p.xy() - from.xy()).norm(), |(centre, _)| {
+                (from.xy() - centre).norm()
+            });
+            c.feed(compensation::Move {
+                line: self.lines.len() - 1,
+                size_mm,
+                arc_ccw: arc.map(|(_, ccw)| ccw),
+            });
+        }
         self.at = Some((*p, words));
         Ok(())
     }
@@ -606,6 +683,7 @@ impl<'a> Writer<'a> {
         if !moves {
             return Ok(());
         }
+        self.compensation_off();
         if self.g.pierce.is_some() {
             self.power_off();
         }
@@ -713,6 +791,7 @@ impl<'a> Writer<'a> {
     }
 
     fn finish(mut self, job_id: &str) -> Result<String, EmitError> {
+        self.compensation_off();
         self.power_off();
         if self.g.feed_mode == FeedMode::InverseTime {
             // Leave the controller in the usual mode for whatever is run next.

@@ -3,6 +3,8 @@
 //! - [`arcs`]: G2/G3 arc fitting within a tolerance.
 //! - [`gcode`]: G-code for the profile's dialect (`cell_profiles::GcodeSettings`): axis words,
 //!   decimals, G94 or G93 inverse-time feeds, power words, pre-heat dwell, start and end lines.
+//! - [`compensation`]: controller cutter compensation for sheet cutting (`G41`/`G42`, the kerf
+//!   in LinuxCNC's tool table), for profiles with `cutting.compensation: controller`.
 //! - [`rapid`]: ABB RAPID modules (`.mod`, `.modx` on RobotWare 7) and program files (`.pgf`)
 //!   for a robot profile (seed 004 §4.7): robtargets, speeddata per speed, arc or digital-output
 //!   weld on/off, module splitting.
@@ -17,6 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod arcs;
+pub mod compensation;
 pub mod gcode;
 pub mod program;
 pub mod rapid;
@@ -24,9 +27,18 @@ pub mod rapid;
 use cell_msgs::{MachineProgram, ProgramFile, Toolpath};
 use cell_profiles::MachineProfile;
 
+/// What a job adds to the profile for one program.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EmitOptions {
+    /// The sheet's material and thickness, for the kerf of controller compensation; `None`:
+    /// the profile's `cutting.default_material`.
+    pub material: Option<cell_profiles::MaterialRef>,
+}
+
 /// The program for `toolpath` on `profile`: G-code (one `.ngc` file) if the profile has a
 /// `gcode` section, RAPID modules if it has a `rapid` section. `job_id` names the files and
-/// goes into their header comments, sanitised.
+/// goes into their header comments, sanitised. As [`emit_program_with`] with the default
+/// options.
 ///
 /// # Errors
 /// A profile with neither section, or any error of [`gcode::emit`] / [`rapid::emit`]. Nothing
@@ -36,16 +48,39 @@ pub fn emit_program(
     profile: &MachineProfile,
     job_id: &str,
 ) -> Result<MachineProgram, EmitError> {
+    emit_program_with(toolpath, profile, job_id, &EmitOptions::default())
+}
+
+/// As [`emit_program`], with the job's `options`. A sheet-cutting program with controller
+/// compensation gets a second file, the tool table [`compensation::TOOL_TABLE_FILE`] with the
+/// kerf as tool 1's diameter.
+///
+/// # Errors
+/// As [`emit_program`].
+pub fn emit_program_with(
+    toolpath: &Toolpath,
+    profile: &MachineProfile,
+    job_id: &str,
+    options: &EmitOptions,
+) -> Result<MachineProgram, EmitError> {
     let (dialect, files) = if let Some(g) = &profile.gcode {
-        let text = gcode::emit(toolpath, profile, job_id)?;
+        let text = gcode::emit_with(toolpath, profile, job_id, options)?;
         let dialect = serde_dialect_name(g.dialect);
-        (
-            dialect,
-            vec![ProgramFile {
-                name: format!("{}.ngc", file_stem(job_id)),
-                text,
-            }],
-        )
+        let mut files = vec![ProgramFile {
+            name: format!("{}.ngc", file_stem(job_id)),
+            text,
+        }];
+        if let Some(kerf) = compensation::controller_kerf_mm(toolpath, profile, options)? {
+            let (kerf, unit) = match g.units {
+                cell_profiles::Units::Mm => (kerf, "mm"),
+                cell_profiles::Units::Inch => (kerf / 25.4, "inch"),
+            };
+            files.push(ProgramFile {
+                name: compensation::TOOL_TABLE_FILE.into(),
+                text: compensation::tool_table(kerf, unit),
+            });
+        }
+        (dialect, files)
     } else if profile.rapid.is_some() {
         ("rapid".to_string(), rapid::emit(toolpath, profile, job_id)?)
     } else {
@@ -217,6 +252,51 @@ pub enum EmitError {
         name: String,
         /// The rule broken.
         reason: String,
+    },
+    /// Controller compensation without a kerf: no material, or none the profile's kerf table
+    /// has.
+    #[error("machine profile {profile:?}: controller compensation: {reason}")]
+    Kerf {
+        /// Profile name.
+        profile: String,
+        /// What is missing.
+        reason: String,
+    },
+    /// Controller compensation on a contour without a lead-in from its scrap side: the
+    /// controller's entry move would end in the part.
+    #[error(
+        "segment {segment}: controller compensation needs a lead-in onto this contour from its \
+         scrap side (entering from the rapid would cut into the part)"
+    )]
+    NoLeadIn {
+        /// The contour's cut segment.
+        segment: usize,
+    },
+    /// A contour where controller compensation cannot be switched on: no lead-in move nor
+    /// rapid longer than the tool radius (LinuxCNC refuses a shorter entry move).
+    #[error(
+        "segment {segment}: no lead-in move or rapid to the pierce longer than the kerf radius \
+         {radius_mm} mm to switch cutter compensation on"
+    )]
+    CompensationEntry {
+        /// The contour's lead-in segment.
+        segment: usize,
+        /// Half the kerf, mm.
+        radius_mm: f64,
+    },
+    /// Controller compensation of an arc that curves round the tool with a radius no larger
+    /// than the tool's (half the kerf): LinuxCNC refuses it, the hole or lead is too small.
+    #[error(
+        "segment {segment}: an arc of radius {arc_radius_mm:.3} mm curves round the tool, which \
+         needs more than the kerf radius {radius_mm} mm: too small for controller compensation"
+    )]
+    CompensationArc {
+        /// The segment (lead-in, cut or lead-out).
+        segment: usize,
+        /// The arc's radius, mm.
+        arc_radius_mm: f64,
+        /// Half the kerf, mm.
+        radius_mm: f64,
     },
     /// Writing the output failed.
     #[error("{path}: {message}")]

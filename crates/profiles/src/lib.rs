@@ -16,9 +16,10 @@
 //!
 //! One file per concept: [`machine`] (the profile, its axes and feed limit, loading and the
 //! section-by-section check), [`hotwire`] (the towers), [`gcode`] and [`template`] (G-code
-//! output), [`rapid`] (ABB RAPID output), [`envelope`] (positions against the travel),
-//! [`error`]. Errors have the shape of [`cell_config`]: `FILE[:LINE]: field `PATH`: what`.
+//! output), [`rapid`] (ABB RAPID output), [`cutting`] (sheet cutting: kerf table, lead-ins,
+//! compensation), [`envelope`] (positions against the travel), [`error`]. Errors have the shape of [`cell_config`]: `FILE[:LINE]: field `PATH`: what`.
 
+pub mod cutting;
 pub mod envelope;
 pub mod error;
 pub mod gcode;
@@ -27,6 +28,9 @@ pub mod machine;
 pub mod rapid;
 pub mod template;
 
+pub use cutting::{
+    Compensation, CuttingSection, KerfEntry, LeadIn, LeadShape, MaterialRef, TooSmallHoles,
+};
 pub use envelope::EnvelopeViolation;
 pub use error::ProfileError;
 pub use gcode::{
@@ -76,6 +80,18 @@ pub const EMBEDDED_PROFILES: &[(&str, &str)] = &[
         "marlin-extruder",
         include_str!("../../../config/machines/marlin-extruder.yaml"),
     ),
+    (
+        "linuxcnc-plasma-3015",
+        include_str!("../../../config/machines/linuxcnc-plasma-3015.yaml"),
+    ),
+    (
+        "linuxcnc-plasma-4020",
+        include_str!("../../../config/machines/linuxcnc-plasma-4020.yaml"),
+    ),
+    (
+        "linuxcnc-laser-3015",
+        include_str!("../../../config/machines/linuxcnc-laser-3015.yaml"),
+    ),
 ];
 
 #[cfg(test)]
@@ -98,6 +114,23 @@ mod tests {
         assert!(e.to_string().contains("linuxcnc-xyuv"), "{e}");
         let e = MachineProfile::resolve("/nonexistent/m.yaml").unwrap_err();
         assert!(e.to_string().starts_with("/nonexistent/m.yaml"), "{e}");
+    }
+
+    #[test]
+    fn every_file_in_config_machines_is_embedded() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/machines");
+        let mut on_disk: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter_map(|n| n.strip_suffix(".yaml").map(String::from))
+            .collect();
+        on_disk.sort();
+        let mut embedded: Vec<String> = EMBEDDED_PROFILES
+            .iter()
+            .map(|(n, _)| n.to_string())
+            .collect();
+        embedded.sort();
+        assert_eq!(on_disk, embedded);
     }
 
     fn base() -> String {

@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 
 use cell_config::{Allowed, FieldError};
 
-use crate::{GcodeSettings, HotwireGeometry, ProfileError, RapidSettings, EMBEDDED_PROFILES};
+use crate::{
+    Compensation, CuttingSection, Dialect, GcodeSettings, HotwireGeometry, ProfileError,
+    RapidSettings, EMBEDDED_PROFILES,
+};
 
 /// The process a machine runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -46,6 +49,10 @@ pub struct MachineProfile {
     /// How the emitter writes ABB RAPID for this robot; exclusive with `gcode`.
     #[serde(default)]
     pub rapid: Option<RapidSettings>,
+    /// Sheet cutting: kerf compensation, lead-ins and the kerf table (`sheet_cut` machines
+    /// only).
+    #[serde(default)]
+    pub cutting: Option<CuttingSection>,
 }
 
 impl MachineProfile {
@@ -102,8 +109,9 @@ impl MachineProfile {
     /// Checks the values, section by section: the axes (letters A–Z, finite min < max), the
     /// feed limit (> 0), the process's sections (a `hotwire` section exactly on a hot-wire
     /// machine), the hot-wire towers (`hotwire.rs`), the G-code
-    /// settings ([`GcodeSettings::validate`]) and the RAPID settings
-    /// ([`RapidSettings::validate`], exclusive with G-code).
+    /// settings ([`GcodeSettings::validate`]), the RAPID settings
+    /// ([`RapidSettings::validate`], exclusive with G-code) and the sheet cutting settings
+    /// ([`CuttingSection::validate`]).
     ///
     /// # Errors
     /// [`ProfileError::Invalid`] naming `source_name` and the field of the first problem.
@@ -131,6 +139,40 @@ impl MachineProfile {
                 ));
             }
             r.validate(self).map_err(|e| e.within("rapid"))?;
+        }
+        if let Some(c) = &self.cutting {
+            self.validate_cutting(c)?;
+        }
+        Ok(())
+    }
+
+    /// The `cutting` section: on a sheet-cutting machine only, its values
+    /// ([`CuttingSection::validate`]), and controller compensation only where the program is
+    /// LinuxCNC G-code (the dialect with `G41`/`G42` and a tool table the emitter writes).
+    fn validate_cutting(&self, c: &CuttingSection) -> Result<(), FieldError> {
+        if self.process != Process::SheetCut {
+            return Err(FieldError::new(
+                "cutting",
+                format!(
+                    "only a sheet-cutting machine has a cutting section (process is {:?})",
+                    self.process
+                ),
+            ));
+        }
+        c.validate().map_err(|e| e.within("cutting"))?;
+        let dialect = self.gcode.as_ref().map(|g| g.dialect);
+        if c.compensation == Compensation::Controller && dialect != Some(Dialect::Linuxcnc) {
+            let program = dialect.map_or("no G-code".to_string(), |d| {
+                let name = format!("{d:?}").to_ascii_lowercase();
+                format!("G-code dialect {name}")
+            });
+            return Err(FieldError::new(
+                "cutting.compensation",
+                format!(
+                    "controller compensation (G41/G42 with the kerf in the tool table) needs the \
+                     linuxcnc G-code dialect; this machine takes {program}: use geometric"
+                ),
+            ));
         }
         Ok(())
     }

@@ -122,6 +122,55 @@ pub fn sheet_part() -> Toolpath {
     }
 }
 
+/// The sheet part of [`sheet_part`] the way the sequencer writes it with lead-ins: each
+/// contour entered along a lead-in from its scrap side and left along a tangent lead-out (a
+/// quarter arc of r = 2 turning into the scrap). The hole (counter-clockwise from 70, 50) is
+/// entered on a quarter arc of r = 3 from (67, 47) inside it; the outline (counter-clockwise
+/// from 50, 25 on its bottom edge) on a 5 mm line from (50, 20) below it. Power 80 %,
+/// 20 mm/s.
+pub fn sheet_part_with_leads() -> Toolpath {
+    let travel =
+        |a: [f64; 3], b: [f64; 3]| segment(ToolpathSegment::KIND_TRAVEL, &[a, b], 100.0, 0.0);
+    let cut = |kind: u8, pts: &[[f64; 3]]| segment(kind, pts, 20.0, 80.0);
+    let hole = arc_points(60.0, 50.0, 10.0, 0.0, 0.0, 360.0, 240);
+    let hole_lead_in = arc_points(67.0, 50.0, 3.0, 0.0, -90.0, 0.0, 30);
+    let mut outline = vec![[50.0, 25.0, 0.0], [92.0, 25.0, 0.0]];
+    outline.extend(arc_points(92.0, 33.0, 8.0, 0.0, -90.0, 0.0, 60));
+    outline.extend([
+        [100.0, 75.0, 0.0],
+        [20.0, 75.0, 0.0],
+        [20.0, 25.0, 0.0],
+        [50.0, 25.0, 0.0],
+    ]);
+    let segments = vec![
+        travel([0.0, 0.0, 0.0], hole_lead_in[0]),
+        cut(ToolpathSegment::KIND_LEAD, &hole_lead_in),
+        cut(ToolpathSegment::KIND_CUT, &hole),
+        cut(
+            ToolpathSegment::KIND_LEAD,
+            &arc_points(68.0, 50.0, 2.0, 0.0, 0.0, 90.0, 20),
+        ),
+        travel([68.0, 52.0, 0.0], [50.0, 20.0, 0.0]),
+        cut(
+            ToolpathSegment::KIND_LEAD,
+            &[[50.0, 20.0, 0.0], [50.0, 25.0, 0.0]],
+        ),
+        cut(ToolpathSegment::KIND_CUT, &outline),
+        cut(
+            ToolpathSegment::KIND_LEAD,
+            &arc_points(50.0, 23.0, 2.0, 0.0, 90.0, 0.0, 20),
+        ),
+        travel([52.0, 23.0, 0.0], [0.0, 0.0, 0.0]),
+    ];
+    Toolpath {
+        job_id: "plate".into(),
+        process: Toolpath::PROCESS_SHEET_CUT,
+        power_unit: Toolpath::POWER_LASER_PERCENT,
+        segments,
+        ..Default::default()
+    }
+}
+
 /// Flow of a 0.45 x 0.2 mm bead at `feed` mm/s (mm³/s).
 pub fn bead_flow(feed: f64) -> f64 {
     0.45 * 0.2 * feed
@@ -244,6 +293,9 @@ pub fn dialect_samples() -> Vec<(&'static str, Toolpath)> {
         ("grbl-xy", hotwire_straight()),
         ("grbl-laser", sheet_part()),
         ("linuxcnc-plasma", sheet_part()),
+        ("linuxcnc-plasma-3015", sheet_part()),
+        ("linuxcnc-plasma-4020", sheet_part()),
+        ("linuxcnc-laser-3015", sheet_part()),
         ("marlin-extruder", printed_layers()),
     ]
 }
