@@ -6,8 +6,28 @@
 //! - `plan.json`: the `cell_msgs/CutPlan` (order, parts, pierce points, policy, lengths,
 //!   overheats, max temperature, cost) as JSON;
 //! - `program.ngc`: the machine program for `--profile` (through [`cell_emitter`]);
-//! - `report.json`: idle and cut length, overheats, max temperature, runtime, policy and the
-//!   figures of every phase (load, construction, improvement, simulation).
+//! - `tool.tbl`: with a profile's `cutting.compensation: controller`, LinuxCNC's tool table
+//!   giving tool 1 the kerf as its diameter (the program's `G41`/`G42` read it);
+//! - `plan.svg`: the plan to check before cutting, in machine coordinates
+//!   ([`cell_sequencer::plan_svg`]): sheet, parts, cuts, lead-ins, pierces with the cut order,
+//!   rapids and the overheats, the figures in its title;
+//! - `report.json`: idle and cut length, overheats, max temperature, runtime, policy, the
+//!   figures of every phase (load, construction, improvement, simulation) and the sheet
+//!   (`{"rule": "limits", "size_mm": [3000, 1500], "origin_mm": [0, 0], "origin_from":
+//!   "drawing"}`: which rule found it and where its corner is on the machine), and with a
+//!   profile's `cutting:` section the `cut`: material, thickness, kerf, compensation, lead
+//!   lengths, how many pierces had to come closer than the lead-in length, small holes
+//!   pierced at their centre, and the holes left out (`too_small_holes: skip`).
+//!
+//! Kerf and leads (`cell_sequencer::cut`): with a `cutting:` section in the profile, every
+//! contour is cut half the kerf (for `--material` at `--thickness`, from the profile's table)
+//! off its drawn line on the scrap side and entered along a lead-in from a pierce on the scrap
+//! side; a hole too small for the kerf, or parts nested closer than the kerf, are errors
+//! naming them (exit 65).
+//!
+//! The program cuts where the drawing says (`cell_sequencer::placement`): a DXF's coordinates
+//! are kept, unless `--sheet-origin X,Y` places the sheet's lower-left corner at X,Y on the
+//! machine. A part outside the profile's X/Y travel is an error naming it; nothing is written.
 //!
 //! A progress bar shows the phase and the best cost so far.
 //!
@@ -19,9 +39,12 @@
 use std::{path::PathBuf, process::ExitCode};
 
 use cell_sequencer::{
+    cut::{spec_for_profile, CutSummary},
     improve::ImproveParams,
     job::{self, LayoutSource, PierceMode, SheetJob, SheetOption, UnknownChoice},
-    toolpath::{to_cut_plan_msg, to_toolpath, ToolpathOptions},
+    placement::{SheetPlacement, Travel},
+    plan_svg::plan_svg,
+    toolpath::{to_cut_plan_msg, to_toolpath, with_cut, ToolpathOptions},
 };
 use clap::Args;
 
@@ -49,6 +72,10 @@ pub struct SheetArgs {
     /// Skip the improvement phase.
     #[arg(long)]
     pub no_improve: bool,
+    /// Heat in the cost: on (the thermal raster, seed 003) or off (idle length alone under the
+    /// precedence rules; the final plan is still simulated, so report.json gives its overheats).
+    #[arg(long, default_value = "on", value_name = "on|off")]
+    pub thermal: String,
     /// Time budget of the improvement phase, in seconds; 0 = iterations only (deterministic).
     #[arg(long, default_value_t = 0.0)]
     pub seconds: f64,
@@ -58,6 +85,34 @@ pub struct SheetArgs {
     /// RNG seed (random policy, improvement).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Place the sheet's lower-left corner at X,Y mm on the machine (machine = sheet-relative +
+    /// X,Y). Default: the drawing's own coordinates (the sheet is the SHEET-layer contour, else
+    /// $LIMMIN/$LIMMAX or $EXTMIN/$EXTMAX when they contain the parts, else the parts' extent;
+    /// a JSON layout's `origin`). report.json says which rule applied.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true, value_parser = parse_origin)]
+    pub sheet_origin: Option<[f64; 2]>,
+    /// The sheet's material, as the profile's kerf table names it (e.g. mild_steel). Default:
+    /// the profile's `cutting.default_material`. With a `cutting:` section the contours are
+    /// offset by half the kerf and entered along lead-ins from the scrap side.
+    #[arg(long, value_name = "NAME")]
+    pub material: Option<String>,
+    /// The sheet's thickness, mm (picks the kerf from the profile's table, interpolated between
+    /// rows). Default: the profile's `cutting.default_material`.
+    #[arg(long, value_name = "MM")]
+    pub thickness: Option<f64>,
+}
+
+/// `X,Y` in mm, both finite.
+fn parse_origin(s: &str) -> Result<[f64; 2], String> {
+    let bad = || format!("{s:?}: expected X,Y in mm, e.g. 100,50");
+    let (x, y) = s.split_once(',').ok_or_else(bad)?;
+    let x: f64 = x.trim().parse().map_err(|_| bad())?;
+    let y: f64 = y.trim().parse().map_err(|_| bad())?;
+    if x.is_finite() && y.is_finite() {
+        Ok([x, y])
+    } else {
+        Err(bad())
+    }
 }
 
 /// `report.json`.
@@ -68,6 +123,9 @@ struct Report<'a> {
     policy: &'a str,
     precedence: &'a str,
     pierce: &'a str,
+    /// `on` or `off` (`--thermal`): whether the order weighed the heat; the overheats below
+    /// are the final simulation's either way.
+    thermal: &'a str,
     improved: bool,
     seed: u64,
     profile: &'a str,
@@ -79,6 +137,19 @@ struct Report<'a> {
     simulated_time_s: f64,
     runtime_s: f64,
     phases: &'a [job::PhaseFigures],
+    sheet: SheetPlacement,
+    /// The material, kerf and leads (absent for a profile without a `cutting:` section).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    cut: Option<CutReport>,
+}
+
+/// `report.json`'s `cut`: the material and what its kerf and leads did.
+#[derive(Debug, Serialize)]
+struct CutReport {
+    material: String,
+    thickness_mm: f64,
+    #[serde(flatten)]
+    summary: CutSummary,
 }
 
 /// The option of `cell sheet` a job option comes from (exhaustive: a new option needs one).
@@ -87,6 +158,7 @@ pub fn flag_for(option: SheetOption) -> &'static str {
         SheetOption::Policy => "--policy",
         SheetOption::Precedence => "--precedence",
         SheetOption::Pierce => "--pierce",
+        SheetOption::Thermal => "--thermal",
     }
 }
 
@@ -114,6 +186,10 @@ pub fn run(a: SheetArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return unknown_choice(&e),
     };
+    let thermal = match job::parse_thermal(&a.thermal) {
+        Ok(t) => t,
+        Err(e) => return unknown_choice(&e),
+    };
     if !(a.seconds.is_finite() && a.seconds >= 0.0) {
         return usage(format!("--seconds {}: must be finite and ≥ 0", a.seconds));
     }
@@ -121,7 +197,12 @@ pub fn run(a: SheetArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return usage(e),
     };
+    let cut = match spec_for_profile(&profile, a.material.as_deref(), a.thickness) {
+        Ok(c) => c,
+        Err(e) => return usage(format!("--material/--thickness: {e}")),
+    };
     let sheet_job = SheetJob {
+        cut: cut.as_ref().map(|(spec, _)| spec.clone()),
         layout: LayoutSource::File(a.layout.clone()),
         precedence,
         pierce,
@@ -132,6 +213,12 @@ pub fn run(a: SheetArgs) -> ExitCode {
             ..Default::default()
         },
         seed: a.seed,
+        cost: cell_sequencer::cost::CostParams {
+            thermal,
+            ..Default::default()
+        },
+        sheet_origin: a.sheet_origin,
+        travel: Some(Travel::of(&profile)),
         ..Default::default()
     };
     if let Err(e) = std::fs::create_dir_all(&a.out) {
@@ -174,15 +261,23 @@ pub fn run(a: SheetArgs) -> ExitCode {
         power_percent: 100.0,
     };
     let toolpath = to_toolpath(&out.problem, &out.plan, &job_id, &opt);
-    let plan_msg = to_cut_plan_msg(
-        &out.problem,
-        &out.plan,
-        &job_id,
-        job::policy_name(policy),
-        out.improved,
-        t.ambient_c,
+    let plan_msg = with_cut(
+        to_cut_plan_msg(
+            &out.problem,
+            &out.plan,
+            &job_id,
+            job::policy_name(policy),
+            out.improved,
+            t.ambient_c,
+        ),
+        out.cut.as_ref(),
     );
-    let program = match cell_emitter::emit_program(&toolpath, &profile, &job_id) {
+    // The job's material: controller compensation's tool table gets its kerf.
+    let emit_options = cell_emitter::EmitOptions {
+        material: cut.as_ref().map(|(_, m)| m.clone()),
+    };
+    let program = match cell_emitter::emit_program_with(&toolpath, &profile, &job_id, &emit_options)
+    {
         Ok(p) => p,
         Err(e) => return bad_data(format!("{}: {e}", a.layout.display())),
     };
@@ -195,6 +290,7 @@ pub fn run(a: SheetArgs) -> ExitCode {
         policy: job::policy_name(policy),
         precedence: &a.precedence,
         pierce: &a.pierce,
+        thermal: &a.thermal,
         improved: out.improved,
         seed: a.seed,
         profile: &profile.name,
@@ -206,6 +302,12 @@ pub fn run(a: SheetArgs) -> ExitCode {
         simulated_time_s: out.plan.time_s,
         runtime_s: out.seconds,
         phases: &out.phases,
+        sheet: out.sheet,
+        cut: cut.zip(out.cut.clone()).map(|((_, m), summary)| CutReport {
+            material: m.material,
+            thickness_mm: m.thickness_mm,
+            summary,
+        }),
     };
     let files = [
         ("plan.json", serde_json::to_string_pretty(&plan_msg)),
@@ -223,12 +325,29 @@ pub fn run(a: SheetArgs) -> ExitCode {
     if let Err(e) = cell_emitter::program::write_atomically(&a.out.join("program.ngc"), &ngc.text) {
         return failure(e);
     }
+    // Files the program needs beside it (controller compensation's tool.tbl).
+    for file in &program.files[1..] {
+        if let Err(e) = cell_emitter::program::write_atomically(&a.out.join(&file.name), &file.text)
+        {
+            return failure(e);
+        }
+    }
+    let picture = plan_svg(&out.problem, &toolpath, &plan_msg, &out.overheat_points);
+    if let Err(e) = cell_emitter::program::write_atomically(&a.out.join("plan.svg"), &picture) {
+        return failure(e);
+    }
     println!(
-        "cell sheet: {} contours, {} ({}), idle {:.1} mm, cut {:.1} mm, {} overheats, max {:.0} °C \
-         above ambient, {:.1} s; wrote {}/{{plan.json,program.ngc,report.json}}",
+        "cell sheet: {} contours, {}, {} ({}), idle {:.1} mm, cut {:.1} mm, {} overheats, max \
+         {:.0} °C above ambient, {:.1} s; wrote \
+         {}/{{plan.json,plan.svg,program.ngc,report.json}}",
         report.contours,
+        report.sheet,
         report.policy,
-        if out.improved { "improved" } else { "not improved" },
+        if out.improved {
+            "improved"
+        } else {
+            "not improved"
+        },
         report.idle_length_mm,
         report.cut_length_mm,
         report.overheats,

@@ -150,10 +150,26 @@ async fn sequencer_node_sequences_a_sheet_and_survives_a_broken_layout() {
         .filter(|s| s.kind == ToolpathSegment::KIND_CUT)
         .collect();
     assert_eq!(cuts.len(), problem.contours.len());
-    for (seg, pierce) in cuts.iter().zip(&plan.pierce_points) {
-        assert_eq!(seg.points.first(), Some(pierce));
-        assert_eq!(seg.points.last(), Some(pierce));
+    // Each cut pierces at its plan's pierce point: the heat goes on where the travel to it
+    // ends (the profile's kerf and leads: the lead-in's start, on the scrap side), and each
+    // cut closes on itself.
+    let pierced: Vec<_> = tp
+        .segments
+        .windows(2)
+        .filter(|w| w[0].kind == ToolpathSegment::KIND_TRAVEL)
+        .map(|w| w[1].points.first())
+        .collect();
+    assert_eq!(pierced.len(), plan.pierce_points.len());
+    for (start, pierce) in pierced.iter().zip(&plan.pierce_points) {
+        assert_eq!(*start, Some(pierce));
     }
+    for seg in &cuts {
+        assert_eq!(seg.points.first(), seg.points.last());
+    }
+    assert!(
+        plan.kerf_mm > 0.0 && plan.lead_in_mm > 0.0,
+        "linuxcnc-plasma's cutting:"
+    );
     let travel = cell_sequencer::toolpath::travel_length_mm(tp);
     assert!((travel - plan.idle_length_mm).abs() < 1e-6);
 
@@ -334,6 +350,54 @@ fn cell_sheet_writes_plan_program_and_report() {
     assert_eq!(code, 0, "{}", json["error"]);
 }
 
+/// `--thermal off`: the order minimises idle travel alone; the report says so and still gives
+/// the final simulation's overheats. A word other than on/off is a usage error.
+#[test]
+fn cell_sheet_thermal_off_minimises_idle_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let layout = data("plate_holes_nest.json");
+    let report = |thermal: &str| -> serde_json::Value {
+        let out = dir.path().join(thermal);
+        let run = std::process::Command::new(CELL)
+            .args(["sheet", "--thermal", thermal, "--layout"])
+            .arg(&layout)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap()
+    };
+    let (on, off) = (report("on"), report("off"));
+    assert_eq!(
+        (on["thermal"].as_str(), off["thermal"].as_str()),
+        (Some("on"), Some("off"))
+    );
+    let idle = |r: &serde_json::Value| r["idle_length_mm"].as_f64().unwrap();
+    assert!(idle(&off) <= idle(&on) + 1e-9, "{off} vs {on}");
+    // The overheats and the maximum temperature are simulated all the same.
+    assert!(off["overheats"].as_u64().is_some());
+    assert!(off["max_temperature_c"].as_f64().unwrap() > 100.0, "{off}");
+
+    let run = std::process::Command::new(CELL)
+        .args(["sheet", "--thermal", "warm", "--layout"])
+        .arg(&layout)
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(64), "{stderr}");
+    assert!(
+        stderr.contains("--thermal") && stderr.contains("warm"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn cell_sheet_names_a_broken_layout_and_bad_options() {
     let dir = tempfile::tempdir().unwrap();
@@ -362,4 +426,108 @@ fn cell_sheet_names_a_broken_layout_and_bad_options() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(64), "{stderr}");
     assert!(stderr.contains("fastest"), "{stderr}");
+}
+
+/// `--material`/`--thickness` pick the kerf from the profile's `cutting:` table: the report
+/// and the plan state it, every pierce lies on the scrap side off the drawn contours; a
+/// material the table lacks is a usage error, a hole too small for the kerf names the hole.
+#[test]
+fn cell_sheet_cuts_with_the_profiles_kerf_and_leads() {
+    let dir = tempfile::tempdir().unwrap();
+    let layout = data("plate_holes_nest.json");
+    let sheet = |args: &[&str], layout: &Path, out: &Path| {
+        std::process::Command::new(CELL)
+            .args(["sheet", "--no-improve"])
+            .args(args)
+            .arg("--layout")
+            .arg(layout)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let out = dir.path().join("3mm");
+    let run = sheet(
+        &["--material", "mild_steel", "--thickness", "3"],
+        &layout,
+        &out,
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let cut = &report["cut"];
+    assert_eq!(cut["material"], "mild_steel");
+    assert_eq!(cut["thickness_mm"].as_f64(), Some(3.0));
+    let kerf = cut["kerf_mm"].as_f64().unwrap();
+    assert!(kerf > 0.5 && kerf < 1.5, "{cut}");
+    assert_eq!(cut["compensation"], "geometric");
+    let plan: CutPlan =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
+    assert_eq!(plan.kerf_mm, kerf);
+    assert_eq!(plan.path_offset_mm, kerf / 2.0);
+    assert_eq!(plan.lead_in_mm, cut["lead_in_mm"].as_f64().unwrap());
+    // Every pierce on the scrap side of its contour, clear of the drawn line.
+    let problem = problem_of(&layout);
+    for (&c, p) in plan.order.iter().zip(&plan.pierce_points) {
+        let contour = &problem.contours[c as usize];
+        let q = [p.x, p.y];
+        let ring = &contour.points;
+        let n = ring.len();
+        let (mut inside, mut d) = (false, f64::INFINITY);
+        for i in 0..n {
+            let (a, b) = (ring[i], ring[(i + 1) % n]);
+            if (a[1] > q[1]) != (b[1] > q[1])
+                && q[0] < a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+            {
+                inside = !inside;
+            }
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let t =
+                (((q[0] - a[0]) * dx + (q[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+            d = d.min((q[0] - a[0] - t * dx).hypot(q[1] - a[1] - t * dy));
+        }
+        let hole = contour.role == cell_sequencer::problem::ContourRole::Hole;
+        assert_eq!(inside, hole, "contour {c}: pierce {q:?} on the part's side");
+        assert!(
+            d > kerf / 2.0 + 0.1,
+            "contour {c}: pierce {d} mm off its line"
+        );
+    }
+    let text = std::fs::read_to_string(out.join("program.ngc")).unwrap();
+    assert_eq!(
+        text.lines().filter(|l| l.starts_with("M3")).count(),
+        plan.order.len()
+    );
+
+    let run = sheet(
+        &["--material", "unobtainium"],
+        &layout,
+        &dir.path().join("x"),
+    );
+    assert_eq!(run.status.code(), Some(64));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("--material") && stderr.contains("unobtainium"),
+        "{stderr}"
+    );
+
+    let tiny = dir.path().join("tiny_hole.json");
+    std::fs::write(
+        &tiny,
+        r#"{"sheet": [100, 100], "parts": [{"name": "plate",
+            "outer": {"points": [[10,10],[90,10],[90,90],[10,90]]},
+            "holes": [{"points": [[50,50],[51,50],[51,51],[50,51]]}]}]}"#,
+    )
+    .unwrap();
+    let run = sheet(&[], &tiny, &dir.path().join("tiny"));
+    assert_eq!(run.status.code(), Some(65));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("tiny_hole.json") && stderr.contains("parts[0] (plate).holes[0]"),
+        "{stderr}"
+    );
 }

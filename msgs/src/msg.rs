@@ -429,15 +429,17 @@ pub struct CutPlan {
     pub order: Vec<u32>,
     /// The part each cut contour belongs to, one per entry of `order`.
     pub parts: Vec<u32>,
-    /// Where each cut pierces, one per entry of `order` (z = 0).
+    /// Where each cut pierces, one per entry of `order` (z = 0); with leads, the lead-in's
+    /// start on the scrap side.
     pub pierce_points: Vec<Point>,
     /// The policy that built the order (nearest, min_overheat, random, path_overheat).
     pub policy: String,
     /// Whether the improvement phase ran.
     pub improved: bool,
-    /// Rapid (idle) travel from the start point through every pierce point and back.
+    /// Rapid (idle) travel from the start point through every pierce point and back (with
+    /// leads: from each cut's lead-out end to the next pierce).
     pub idle_length_mm: f64,
-    /// Length cut, the sum of the contour perimeters.
+    /// Length cut, the sum of the contour perimeters (with leads: the cut paths and the leads).
     pub cut_length_mm: f64,
     /// Pierces and cut segments that started in an overheated cell.
     pub overheats: u32,
@@ -445,6 +447,16 @@ pub struct CutPlan {
     pub max_temperature_c: f64,
     /// The objective: idle length + w · overheats + lead-in penalties.
     pub cost: f64,
+    /// Kerf width, mm (0: cut on the drawn contours, no leads).
+    pub kerf_mm: f64,
+    /// How far the cut path lies off the drawn contour, mm (half the kerf; 0 when the
+    /// controller compensates).
+    pub path_offset_mm: f64,
+    /// Lead-in length asked for, mm: the pierce's distance from the cut path (less where a
+    /// lead had to be shortened).
+    pub lead_in_mm: f64,
+    /// Lead-out length, mm.
+    pub lead_out_mm: f64,
 }
 
 /// One closed planar polygon of a slice, in the layer's plane (z from the parent

@@ -5,13 +5,19 @@
 //!
 //! Instances: the seeded generator ([`cell_sequencer::generator`], seed 7) at each size, strict
 //! precedence, free pierce candidates; then the real part outlines of
-//! `tests/data/sheet/plate_holes_nest.json`.
+//! `tests/data/sheet/plate_holes_nest.json`; then the dense perforated layouts
+//! ([`cell_sequencer::generator::generate_perforated`], seed 1; issue 19: 5000 contours on
+//! 4000 × 2000 mm).
 //!
 //! `cargo bench -p cell_sequencer --bench sequencing [-- SIZES...]` (sizes in contours, default
-//! 50 500 1000 5000; `plate` alone runs only the plate nest). `BENCH_POLICIES=0` skips the
+//! 50 500 1000 5000 plus the plate nest and `dense5000`; `plate` alone runs only the plate
+//! nest, `denseN` a dense layout of N contours, `dense` = `dense5000`). Every row gives the
+//! peak resident memory while it ran (`peak_mb`: Linux `VmHWM`, reset before each row through
+//! `/proc/self/clear_refs`). `BENCH_THERMAL=on|off` runs one side only; `BENCH_POLICIES=0`
+//! skips the
 //! paper's policies other than nearest (quicker tuning runs); `K_LOSS`, `T_MAX_C`, `CELL_MM`
 //! and `K_C` override the thermal defaults (`LKH_MAX`: the most points handed to LKH-3,
-//! default 2000), `PROXY_WEIGHT`, `PROXY_RADIUS` and `IDLE_BUDGET`
+//! default 2000; `LKH_RUNS`: its runs, default 10), `PROXY_WEIGHT`, `PROXY_RADIUS` and `IDLE_BUDGET`
 //! the improvement's (also `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS`,
 //! `MAX_ITER`).
 //!
@@ -29,7 +35,7 @@ use std::time::Instant;
 
 use cell_sequencer::cost::{CostParams, Evaluator};
 use cell_sequencer::fixtures::scattered;
-use cell_sequencer::generator::{generate, GeneratorConfig};
+use cell_sequencer::generator::{generate, generate_perforated, GeneratorConfig, PerforatedConfig};
 use cell_sequencer::improve::{improve, ImproveOptions, ImproveParams, Improved, Start};
 use cell_sequencer::layout::{Layout, PierceOptions};
 use cell_sequencer::plan::CutPlan;
@@ -46,11 +52,20 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut sizes: Vec<usize> = args.iter().filter_map(|a| a.parse().ok()).collect();
     let plate_only = args.iter().any(|a| a == "plate");
-    if sizes.is_empty() && !plate_only {
+    let mut dense: Vec<usize> = args
+        .iter()
+        .filter_map(|a| match a.strip_prefix("dense")? {
+            "" => Some(5000),
+            n => n.parse().ok(),
+        })
+        .collect();
+    let defaults = sizes.is_empty() && dense.is_empty() && !plate_only;
+    if defaults {
         sizes = vec![50, 500, 1000, 5000];
+        dense = vec![5000];
     }
     println!(
-        "{:>7} {:>6} {:>7} {:>12} {:>9} {:>9} {:>8} {:>7} {:>9} {:>8} {:>7}",
+        "{:>9} {:>6} {:>7} {:>12} {:>9} {:>9} {:>8} {:>7} {:>9} {:>8} {:>7} {:>7}",
         "inst",
         "n",
         "thermal",
@@ -61,6 +76,7 @@ fn main() {
         "max_c",
         "cost",
         "ms",
+        "peak_mb",
         "lkh_%"
     );
     let mut instances: Vec<(String, Problem)> = sizes
@@ -74,11 +90,19 @@ fn main() {
             (format!("gen{n}"), problem_of(&layout))
         })
         .collect();
-    if plate_only || args.is_empty() || args.iter().any(|a| a == "+plate") {
+    if plate_only || defaults || args.iter().any(|a| a == "+plate") {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../tests/data/sheet/plate_holes_nest.json");
         let layout = Layout::from_json_file(&path).expect("plate nest");
         instances.push(("plate".into(), problem_of(&layout)));
+    }
+    for &n in &dense {
+        let layout = generate_perforated(&PerforatedConfig {
+            seed: env("DENSE_SEED").map_or(1, |v| v as u64),
+            contours: n,
+            ..Default::default()
+        });
+        instances.push((format!("dense{n}"), problem_of(&layout)));
     }
     for (name, problem) in &instances {
         run_instance(name, problem);
@@ -92,6 +116,7 @@ fn main() {
             ..Default::default()
         };
         let eval = Evaluator::new(&problem, thermal_params(), cost).unwrap();
+        reset_peak();
         let t0 = Instant::now();
         let nearest = construct(&eval, Policy::Nearest, 0).unwrap();
         let better = improve(&eval, Start::Plan(&nearest), improve_options())
@@ -134,12 +159,18 @@ fn improve_params() -> ImproveParams {
 fn run_instance(name: &str, problem: &Problem) {
     let n = problem.contours.len();
     let all = env("BENCH_POLICIES").is_none_or(|v| v != 0.0);
-    for thermal in [true, false] {
+    let modes: &[bool] = match std::env::var("BENCH_THERMAL").as_deref() {
+        Ok("on") => &[true],
+        Ok("off") => &[false],
+        _ => &[true, false],
+    };
+    for &thermal in modes {
         let cost = CostParams {
             thermal,
             ..Default::default()
         };
         let eval = Evaluator::new(problem, thermal_params(), cost).unwrap();
+        reset_peak();
         let t0 = Instant::now();
         let nearest = construct(&eval, Policy::Nearest, 1).unwrap();
         let nn_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -151,6 +182,7 @@ fn run_instance(name: &str, problem: &Problem) {
                 Policy::PathOverheat,
                 Policy::CostGreedy,
             ] {
+                reset_peak();
                 let t0 = Instant::now();
                 let plan = construct(&eval, policy, 1).unwrap();
                 let ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -159,12 +191,17 @@ fn run_instance(name: &str, problem: &Problem) {
         }
         // Improvement from nearest pierce and (thermal cost on) from the paper's method, the
         // node's default construction.
-        let starts: &[Policy] = if thermal {
-            &[Policy::Nearest, Policy::PathOverheat]
+        let starts: Vec<Policy> = if thermal {
+            vec![Policy::Nearest, Policy::PathOverheat, Policy::CostGreedy]
         } else {
-            &[Policy::Nearest]
+            vec![Policy::Nearest]
         };
-        for &policy in starts {
+        let only = std::env::var("BENCH_STARTS").unwrap_or_default();
+        for policy in starts
+            .into_iter()
+            .filter(|&p| only.is_empty() || only.split(',').any(|s| s == start_name(p)))
+        {
+            reset_peak();
             let t0 = Instant::now();
             let better = if policy == Policy::Nearest {
                 // The order alone; its raster run goes alongside the search.
@@ -187,21 +224,29 @@ fn run_instance(name: &str, problem: &Problem) {
             } else {
                 lkh_length(problem, &better).map(|l| 100.0 * (better.idle_mm / l - 1.0))
             };
-            let label = if policy == Policy::Nearest {
-                "nearest+imp"
-            } else {
-                "path+imp"
-            };
+            let label = format!("{}+imp", start_name(policy));
+            let label = label.as_str();
             row(name, n, thermal, label, &better, ms, gap);
             if thermal {
                 println!(
-                    "{:>7}   {label} vs nearest: overheats {:+.1} %, idle ×{:.2}",
+                    "{:>9}   {label} vs nearest: overheats {:+.1} %, idle ×{:.2}",
                     "",
                     100.0 * (better.overheats as f64 / nearest.overheats.max(1) as f64 - 1.0),
                     better.idle_mm / nearest.idle_mm
                 );
             }
         }
+    }
+}
+
+/// The short name of an improvement start in the rows and `BENCH_STARTS`.
+fn start_name(p: Policy) -> &'static str {
+    match p {
+        Policy::Nearest => "nearest",
+        Policy::PathOverheat => "path",
+        Policy::CostGreedy => "greedy",
+        Policy::MinOverheat => "min",
+        Policy::Random => "random",
     }
 }
 
@@ -248,8 +293,10 @@ fn lkh_length(problem: &Problem, plan: &CutPlan) -> Option<f64> {
     use std::process::{Command, Stdio};
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/lkh_peer.py");
     let python = std::env::var("LKH_PYTHON").unwrap_or_else(|_| "python3".into());
+    let runs = env("LKH_RUNS").map_or(10, |v| v as usize);
     let mut child = Command::new(python)
         .arg(script)
+        .arg(runs.to_string())
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -268,10 +315,31 @@ fn lkh_length(problem: &Problem, plan: &CutPlan) -> Option<f64> {
     String::from_utf8(out.stdout).ok()?.trim().parse().ok()
 }
 
+/// Resets the process's peak resident set size (Linux: `5` into `/proc/self/clear_refs`), so
+/// the next [`peak_mb`] is the peak of what ran in between.
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// Peak resident set size since the last [`reset_peak`], MB (`VmHWM` of `/proc/self/status`).
+fn peak_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb / 1024.0)
+}
+
 fn row(inst: &str, n: usize, thermal: bool, name: &str, p: &CutPlan, ms: f64, gap: Option<f64>) {
     let gap = gap.map_or_else(|| "".to_string(), |g| format!("{g:+.2}"));
+    let peak = peak_mb().map_or_else(|| "".to_string(), |m| format!("{m:.0}"));
     println!(
-        "{:>7} {:>6} {:>7} {:>12} {:>9.0} {:>9.0} {:>8} {:>7.0} {:>9.0} {:>8.1} {:>7}",
+        "{:>9} {:>6} {:>7} {:>12} {:>9.0} {:>9.0} {:>8} {:>7.0} {:>9.0} {:>8.1} {:>7} {:>7}",
         inst,
         n,
         if thermal { "on" } else { "off" },
@@ -282,6 +350,7 @@ fn row(inst: &str, n: usize, thermal: bool, name: &str, p: &CutPlan, ms: f64, ga
         p.max_temp_c,
         p.cost,
         ms,
+        peak,
         gap
     );
 }

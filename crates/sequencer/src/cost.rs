@@ -3,7 +3,8 @@
 //!
 //! `cost = idle_mm + w_overheat_mm · overheats + Σ lead-in penalties`
 //!
-//! Lead-in penalties, per pierce: `corner_penalty_mm` if the pierce point lies within
+//! Lead-in penalties, per pierce: `corner_penalty_mm` if the pierce point (with leads: where
+//! the lead-in meets the contour) lies within
 //! `corner_radius_mm` of a contour vertex that turns by more than `corner_angle_deg` (a pierce
 //! on a corner spoils the part edge), and `hot_penalty_mm` if the pierce neighbourhood is at or
 //! above `t_max − delta` when pierced (an already hot region). With `thermal` off the thermal
@@ -172,9 +173,10 @@ impl<'p> Evaluator<'p> {
                     })
                     .map(|i| c.points[i])
                     .collect();
-                c.pierce_candidates
-                    .iter()
-                    .map(|&p| {
+                // With leads the cut meets the contour at the lead-in's end, not the pierce.
+                (0..c.pierce_candidates.len())
+                    .map(|k| c.entry(k))
+                    .map(|p| {
                         if corners
                             .iter()
                             .any(|&q| distance(p, q) <= cost.corner_radius_mm)
@@ -191,12 +193,8 @@ impl<'p> Evaluator<'p> {
             .contours
             .iter()
             .map(|c| {
-                c.pierce_candidates
-                    .iter()
-                    .map(|&p| {
-                        let path = crate::thermal::cut_path(c, p);
-                        polyline_length(&path, Norm::Hypot)
-                    })
+                (0..c.pierce_candidates.len())
+                    .map(|k| polyline_length(&c.cut_path(k), Norm::Hypot))
                     .collect()
             })
             .collect();
@@ -250,7 +248,7 @@ impl<'p> Evaluator<'p> {
             return self.assemble(cuts, None);
         }
         for c in cuts {
-            sim.cut_contour(&self.problem.contours[c.contour], c.point(self.problem));
+            sim.cut(&self.problem.contours[c.contour], c.pierce);
         }
         let out = sim.finish(self.problem.start);
         self.assemble(cuts, Some(&out))

@@ -19,9 +19,14 @@
 //! **Roles.** Whether a contour is an outer contour or a hole, and of which part, comes from
 //! the containment tree ([`Layout::from_rings`]), not from layers or colours.
 //!
-//! **Sheet.** [`DxfOptions::sheet`] if given; else the closed contour on layer
-//! [`DxfOptions::sheet_layer`] (its bounding box; the drawing is shifted so that its lower-left
-//! corner is the origin); else the bounding box of all contours, shifted to the origin.
+//! **Sheet** (issue 19, item 1: the program cuts where the drawing says). The first rule that
+//! applies ([`SheetRule`]): [`DxfOptions::sheet`] if given (the sheet spans `[0, a] × [0, b]`
+//! of the drawing); else the bounding box of the closed contour on layer
+//! [`DxfOptions::sheet_layer`]; else the header's `$LIMMIN`/`$LIMMAX`, else its
+//! `$EXTMIN`/`$EXTMAX`, when set (not the ±1e20 placeholders, not empty, not the default
+//! limits 0,0–12,9) and containing every contour; else the contours' bounding box. The layout's
+//! points are relative to that box's lower-left corner and [`Layout::origin`] is the corner, so
+//! the program (origin + point) cuts every contour at the drawing's own coordinates.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -32,12 +37,15 @@ use dxf::Drawing;
 
 use crate::containment::bbox;
 use crate::layout::{Layout, LayoutError};
+use crate::placement::SheetRule;
 use crate::problem::{distance, Point};
 
 /// DXF reading options (issue 7).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DxfOptions {
-    /// Maximum distance between an arc and its flattening chords, mm.
+    /// Maximum distance between an arc and its flattening chords, mm. 0.005 by default: the
+    /// cut path must stay within 0.02 mm of the drawn arc offset by half the kerf (issue 19),
+    /// and the emitter's arc fitting spends most of that.
     pub chord_tol_mm: f64,
     /// Endpoints closer than this are joined when chaining, mm.
     pub join_tol_mm: f64,
@@ -52,7 +60,7 @@ pub struct DxfOptions {
 impl Default for DxfOptions {
     fn default() -> Self {
         DxfOptions {
-            chord_tol_mm: 0.05,
+            chord_tol_mm: 0.005,
             join_tol_mm: 0.01,
             sheet: None,
             sheet_layer: "SHEET".into(),
@@ -373,12 +381,15 @@ fn flatten_path(vertices: &[[f64; 3]], closed: bool, chord_tol_mm: f64) -> Vec<P
 /// [`DxfError`], naming the file and, where it applies, the entities.
 pub fn read_dxf(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfError> {
     let path = path.as_ref();
-    let name = path.display().to_string();
-    let drawing = Drawing::load_file(path).map_err(|e| DxfError::Read {
-        path: name.clone(),
+    let drawing = load_drawing(path)?;
+    layout_from_drawing(&drawing, &path.display().to_string(), opt)
+}
+
+fn load_drawing(path: &Path) -> Result<Drawing, DxfError> {
+    Drawing::load_file(path).map_err(|e| DxfError::Read {
+        path: path.display().to_string(),
         message: e.to_string(),
-    })?;
-    layout_from_drawing(&drawing, &name, opt)
+    })
 }
 
 /// Reads a layout from a `.dxf` file ([`read_dxf`]) or, for any other extension, from the
@@ -387,17 +398,30 @@ pub fn read_dxf(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfE
 /// # Errors
 /// [`DxfError`]; JSON errors come as [`DxfError::Layout`].
 pub fn read_layout(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfError> {
+    read_layout_with_rule(path, opt).map(|(layout, _)| layout)
+}
+
+/// As [`read_layout`], with the rule that found the sheet ([`SheetRule::Layout`] for JSON).
+///
+/// # Errors
+/// As [`read_layout`].
+pub fn read_layout_with_rule(
+    path: impl AsRef<Path>,
+    opt: &DxfOptions,
+) -> Result<(Layout, SheetRule), DxfError> {
     let path = path.as_ref();
     let is_dxf = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("dxf"));
     if is_dxf {
-        read_dxf(path, opt)
+        let drawing = load_drawing(path)?;
+        layout_from_drawing_with_rule(&drawing, &path.display().to_string(), opt)
     } else {
-        Layout::from_json_file(path).map_err(|source| DxfError::Layout {
+        let layout = Layout::from_json_file(path).map_err(|source| DxfError::Layout {
             path: path.display().to_string(),
             source,
-        })
+        })?;
+        Ok((layout, SheetRule::Layout))
     }
 }
 
@@ -411,6 +435,18 @@ pub fn layout_from_drawing(
     name: &str,
     opt: &DxfOptions,
 ) -> Result<Layout, DxfError> {
+    layout_from_drawing_with_rule(drawing, name, opt).map(|(layout, _)| layout)
+}
+
+/// As [`layout_from_drawing`], with the rule that found the sheet (module docs).
+///
+/// # Errors
+/// As [`read_dxf`].
+pub fn layout_from_drawing_with_rule(
+    drawing: &Drawing,
+    name: &str,
+    opt: &DxfOptions,
+) -> Result<(Layout, SheetRule), DxfError> {
     let mut pieces = Vec::new();
     let mut reader = Reader {
         drawing,
@@ -442,30 +478,78 @@ pub fn layout_from_drawing(
         names.push(describe(&piece.sources));
         rings.push(ring);
     }
-    let (shift, sheet) = match (opt.sheet, sheet_box) {
-        (Some(s), _) => ([0.0, 0.0], s),
-        (None, Some(b)) => ([b[0], b[1]], [b[2] - b[0], b[3] - b[1]]),
-        (None, None) => {
-            let all: Vec<Point> = rings.iter().flatten().copied().collect();
-            let b = bbox(&all);
-            if all.is_empty() {
-                ([0.0, 0.0], [1.0, 1.0])
-            } else {
-                ([b[0], b[1]], [b[2] - b[0], b[3] - b[1]])
-            }
-        }
+    let all: Vec<Point> = rings.iter().flatten().copied().collect();
+    let (rule, sheet_box) = match (opt.sheet, sheet_box) {
+        (Some(s), _) => (SheetRule::Option, [0.0, 0.0, s[0], s[1]]),
+        (None, Some(b)) => (SheetRule::SheetLayer, b),
+        (None, None) if all.is_empty() => (SheetRule::Parts, [0.0, 0.0, 1.0, 1.0]),
+        (None, None) => header_sheet(drawing, bbox(&all)),
     };
+    // Sheet-relative inside; the origin gives the drawing's coordinates back.
+    let origin = [sheet_box[0], sheet_box[1]];
+    let sheet = [sheet_box[2] - sheet_box[0], sheet_box[3] - sheet_box[1]];
     for ring in &mut rings {
         for p in ring.iter_mut() {
-            p[0] -= shift[0];
-            p[1] -= shift[1];
+            p[0] -= origin[0];
+            p[1] -= origin[1];
         }
     }
-    Layout::from_rings(sheet, opt.start, rings, &names).map_err(|source| DxfError::Layout {
-        path: name.into(),
-        source,
-    })
+    let mut layout =
+        Layout::from_rings(sheet, opt.start, rings, &names).map_err(|source| DxfError::Layout {
+            path: name.into(),
+            source,
+        })?;
+    layout.origin = origin;
+    Ok((layout, rule))
 }
+
+/// The sheet from the DXF header when there is no sheet contour (module docs): `$LIMMIN`/
+/// `$LIMMAX`, else `$EXTMIN`/`$EXTMAX`, the first that is set and contains `parts` (the parts'
+/// bounding box `[x0, y0, x1, y1]`), else `parts` itself.
+fn header_sheet(drawing: &Drawing, parts: [f64; 4]) -> (SheetRule, [f64; 4]) {
+    let h = &drawing.header;
+    let boxes = [
+        (
+            SheetRule::Limits,
+            &h.minimum_drawing_limits,
+            &h.maximum_drawing_limits,
+        ),
+        (
+            SheetRule::Extents,
+            &h.minimum_drawing_extents,
+            &h.maximum_drawing_extents,
+        ),
+    ];
+    for (rule, lo, hi) in boxes {
+        let b = [lo.x, lo.y, hi.x, hi.y];
+        // Unset headers hold 0 × 0 boxes, ±1e20 placeholders, or the dxf crate's (and
+        // AutoCAD's imperial) default limits 0,0–12,9.
+        let set = b.iter().all(|v| v.is_finite() && v.abs() < 1e19)
+            && b[2] > b[0]
+            && b[3] > b[1]
+            && !(rule == SheetRule::Limits && b == [0.0, 0.0, 12.0, 9.0]);
+        let eps = HEADER_BOX_EPS_MM;
+        let contains = b[0] <= parts[0] + eps
+            && b[1] <= parts[1] + eps
+            && b[2] >= parts[2] - eps
+            && b[3] >= parts[3] - eps;
+        if set && contains {
+            // Clamped to the parts: a box a rounding error short is taken as touching them.
+            let b = [
+                b[0].min(parts[0]),
+                b[1].min(parts[1]),
+                b[2].max(parts[2]),
+                b[3].max(parts[3]),
+            ];
+            return (rule, b);
+        }
+    }
+    (SheetRule::Parts, parts)
+}
+
+/// A header box within this of the parts' extent still contains them, mm (header values are
+/// often written with fewer digits than the geometry).
+const HEADER_BOX_EPS_MM: f64 = 1e-3;
 
 /// Walks entities (and the blocks INSERTs place) into [`Piece`]s.
 struct Reader<'a> {
@@ -1183,6 +1267,103 @@ mod tests {
             e.starts_with("s.dxf: SPLINE #") && e.contains("fit points only"),
             "{e}"
         );
+    }
+
+    /// Every ring point in drawing coordinates (origin + sheet-relative), sorted.
+    fn drawing_points(l: &Layout) -> Vec<[i64; 2]> {
+        let mut v: Vec<[i64; 2]> = l
+            .parts
+            .iter()
+            .flat_map(|p| std::iter::once(&p.outer).chain(&p.holes))
+            .flat_map(|r| &r.points)
+            .map(|q| {
+                let m = [q[0] + l.origin[0], q[1] + l.origin[1]];
+                [(m[0] * 1e6).round() as i64, (m[1] * 1e6).round() as i64]
+            })
+            .collect();
+        v.sort_unstable();
+        v
+    }
+
+    fn square_drawing(x: f64, y: f64, s: f64, layer: &str) -> Entity {
+        use dxf::entities::LwPolyline;
+        use dxf::LwPolylineVertex;
+        let mut lw = LwPolyline::default();
+        for (px, py) in [(x, y), (x + s, y), (x + s, y + s), (x, y + s)] {
+            lw.vertices.push(LwPolylineVertex {
+                x: px,
+                y: py,
+                ..Default::default()
+            });
+        }
+        lw.set_is_closed(true);
+        let mut e = Entity::new(EntityType::LwPolyline(lw));
+        e.common.layer = layer.into();
+        e
+    }
+
+    #[test]
+    fn the_sheet_rule_keeps_the_drawings_coordinates() {
+        let p = |x: f64, y: f64| dxf::Point::new(x, y, 0.0);
+        // Two parts with a 10 mm margin: extent (10, 10.15)..(290, 190).
+        let parts = |d: &mut Drawing| {
+            d.add_entity(square_drawing(10.0, 10.15, 50.0, "PARTS"));
+            d.add_entity(square_drawing(250.0, 150.0, 40.0, "PARTS"));
+        };
+        let near =
+            |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9;
+        let rule_of = |d: &Drawing| {
+            let (l, rule) =
+                layout_from_drawing_with_rule(d, "m.dxf", &DxfOptions::default()).unwrap();
+            (rule, l.sheet, l.origin, l)
+        };
+        let mut plain = Drawing::new();
+        parts(&mut plain);
+        // The dxf crate's default header: limits 0,0-12,9, extents 0 x 0: both unset.
+        let (rule, sheet, origin, reference) = rule_of(&plain);
+        assert_eq!((rule, origin), (SheetRule::Parts, [10.0, 10.15]));
+        assert!(near(sheet, [280.0, 179.85]), "{sheet:?}");
+        let want = drawing_points(&reference);
+        assert_eq!(want.first(), Some(&[10_000_000, 10_150_000]));
+        // Limits containing the parts: the sheet; extents beside them are not consulted.
+        let mut d = plain.clone();
+        d.header.minimum_drawing_limits = p(0.0, 0.0);
+        d.header.maximum_drawing_limits = p(300.0, 200.0);
+        d.header.minimum_drawing_extents = p(1e20, 1e20);
+        d.header.maximum_drawing_extents = p(-1e20, -1e20);
+        let (rule, sheet, origin, l) = rule_of(&d);
+        assert_eq!(
+            (rule, sheet, origin),
+            (SheetRule::Limits, [300.0, 200.0], [0.0, 0.0])
+        );
+        assert_eq!(drawing_points(&l), want);
+        // Limits that cut a part off: the extents (written with fewer digits) instead.
+        d.header.maximum_drawing_limits = p(250.0, 200.0);
+        d.header.minimum_drawing_extents = p(10.0, 10.1500004);
+        d.header.maximum_drawing_extents = p(290.0, 190.0);
+        let (rule, sheet, origin, l) = rule_of(&d);
+        assert_eq!((rule, origin), (SheetRule::Extents, [10.0, 10.15]));
+        assert!(near(sheet, [280.0, 179.85]), "{sheet:?}");
+        assert_eq!(drawing_points(&l), want);
+        // Neither contains the parts: their extent.
+        d.header.maximum_drawing_extents = p(200.0, 190.0);
+        assert_eq!(rule_of(&d).0, SheetRule::Parts);
+        // A SHEET contour wins over the header, wherever it is.
+        d.add_entity(square_drawing(-100.0, -50.0, 500.0, "sheet"));
+        let (rule, sheet, origin, l) = rule_of(&d);
+        assert_eq!(
+            (rule, sheet, origin),
+            (SheetRule::SheetLayer, [500.0, 500.0], [-100.0, -50.0])
+        );
+        assert_eq!(drawing_points(&l), want);
+        // A given sheet size: the drawing's [0, a] x [0, b], not moved.
+        let opt = DxfOptions {
+            sheet: Some([400.0, 300.0]),
+            ..Default::default()
+        };
+        let (l, rule) = layout_from_drawing_with_rule(&plain, "m.dxf", &opt).unwrap();
+        assert_eq!((rule, l.origin), (SheetRule::Option, [0.0, 0.0]));
+        assert_eq!(drawing_points(&l), want);
     }
 
     #[test]

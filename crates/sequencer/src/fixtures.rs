@@ -17,6 +17,8 @@ fn contour(
         role,
         points,
         pierce_candidates,
+        leads: Vec::new(),
+        drawn: Vec::new(),
     }
 }
 
@@ -134,6 +136,7 @@ pub fn grid(
     Problem {
         sheet: [20.0 + nx as f64 * pitch, 20.0 + ny as f64 * pitch],
         start: [0.0, 0.0],
+        origin: [0.0, 0.0],
         contours,
         precedence: Precedence {
             predecessors,
@@ -163,6 +166,7 @@ pub fn scattered(n: usize, seed: u64) -> Problem {
     Problem {
         sheet: [1000.0, 1000.0],
         start: [0.0, 0.0],
+        origin: [0.0, 0.0],
         contours,
         precedence: Precedence {
             predecessors: vec![vec![]; n],

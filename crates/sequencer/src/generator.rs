@@ -15,6 +15,8 @@
 //! Generation stops once the contour count reaches `contours`.
 //!
 //! The same [`GeneratorConfig`] (seed included) gives the same layout, byte for byte.
+//!
+//! Dense perforated layouts (issue 19): [`generate_perforated`] ([`PerforatedConfig`]).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -22,6 +24,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::layout::{Layout, Part, Ring};
 use crate::problem::Point;
+
+mod perforated;
+pub use perforated::{generate_perforated, PerforatedConfig};
 
 /// Generator parameters (issue 7).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -96,6 +101,7 @@ pub fn generate(cfg: &GeneratorConfig) -> Layout {
     Layout {
         sheet,
         start: [0.0, 0.0],
+        origin: [0.0, 0.0],
         parts,
     }
 }

@@ -11,6 +11,14 @@
 //! the layout's where it gives one, else the single best free candidate
 //! ([`PierceOptions`] with `max_candidates = 1`). [`PierceMode::Free`]: the layout's pierce
 //! point where it gives one, else up to `max_candidates` free candidates (the GTSP variant).
+//! With a cut spec ([`SheetJob::cut`], [`crate::cut`]) each candidate is a lead-in's start on
+//! the scrap side, and the contours are their cut paths, offset by half the kerf.
+//!
+//! **Thermal off** (`cost.thermal = false`, [`parse_thermal`]; issue 19): the construction and
+//! the improvement minimise the idle length (plus corner penalties) under the precedence rules
+//! alone, without the raster. The final plan is still simulated on the raster once, so its
+//! overheats, maximum temperature and time are what that order does to the sheet; its cost
+//! stays what was minimised. The construction's figures are not simulated (0 overheats).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,19 +26,21 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
-use crate::dxf::{read_layout, DxfError, DxfOptions};
+use crate::cut::{cut_problem, CutError, CutSpec, CutSummary};
+use crate::dxf::{read_layout_with_rule, DxfError, DxfOptions};
 use crate::improve::{improve, ImproveOptions, ImproveParams, Improved, Progress, Start};
 use crate::layout::{Layout, LayoutError, PierceOptions};
+use crate::placement::{check_travel, OriginFrom, OutOfTravel, SheetPlacement, SheetRule, Travel};
 use crate::plan::{Cut, CutPlan};
 use crate::policy::{construct, construct_cuts, Policy};
 use crate::precedence::{PrecedenceMode, Violation};
-use crate::problem::Problem;
-use crate::thermal::{CutThermal, Frame, SequencerParamError, ThermalParams};
+use crate::problem::{Point, Problem};
+use crate::thermal::{CutThermal, Frame, SequencerParamError, ThermalOutcome, ThermalParams};
 
 /// Where the layout comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LayoutSource {
-    /// A `.dxf` or `.json` file ([`read_layout`]).
+    /// A `.dxf` or `.json` file ([`crate::dxf::read_layout`]).
     File(PathBuf),
     /// The JSON format inline ([`Layout::from_json_str`]), named `<layout_json>` in errors.
     Json(String),
@@ -45,6 +55,8 @@ pub enum SheetOption {
     Precedence,
     /// `pierce`: fixed or free pierce points.
     Pierce,
+    /// `thermal`: the heat in the cost (`on`) or idle length alone (`off`).
+    Thermal,
 }
 
 impl SheetOption {
@@ -54,6 +66,7 @@ impl SheetOption {
             Self::Policy => "policy",
             Self::Precedence => "precedence",
             Self::Pierce => "pierce",
+            Self::Thermal => "thermal",
         }
     }
 }
@@ -107,6 +120,23 @@ impl PierceMode {
                 choices: "fixed or free",
             }),
         }
+    }
+}
+
+/// Parses the thermal mode (module docs): `on` (the raster in the cost) gives true, `off`
+/// (idle length alone) false; the job's `cost.thermal`.
+///
+/// # Errors
+/// Any other word, named.
+pub fn parse_thermal(s: &str) -> Result<bool, UnknownChoice> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(UnknownChoice {
+            option: SheetOption::Thermal,
+            given: s.into(),
+            choices: "on or off",
+        }),
     }
 }
 
@@ -177,6 +207,15 @@ pub struct SheetJob {
     pub cost: CostParams,
     /// RNG seed of the random policy and the improvement.
     pub seed: u64,
+    /// Kerf compensation and leads ([`crate::cut`]); `None`: the drawn contours, pierced on
+    /// the contour.
+    pub cut: Option<CutSpec>,
+    /// The operator's placement of the sheet's lower-left corner on the machine, mm; `None`
+    /// keeps the drawing's ([`crate::placement`]).
+    pub sheet_origin: Option<Point>,
+    /// The machine's travel: a part outside it once placed is [`JobError::OutOfTravel`]
+    /// before anything is sequenced; `None` = unchecked.
+    pub travel: Option<Travel>,
 }
 
 impl Default for SheetJob {
@@ -193,6 +232,9 @@ impl Default for SheetJob {
             thermal: ThermalParams::default(),
             cost: CostParams::default(),
             seed: 0,
+            cut: None,
+            sheet_origin: None,
+            travel: None,
         }
     }
 }
@@ -223,6 +265,22 @@ pub enum JobError {
     /// The precedence rules cannot be met.
     #[error("precedence: {0}")]
     Precedence(#[from] Violation),
+    /// The kerf or the leads do not fit the layout (names the contours).
+    #[error("{source_name}: {error}")]
+    Cut {
+        /// The file or `<layout_json>`.
+        source_name: String,
+        /// The contours and why.
+        error: Box<CutError>,
+    },
+    /// A part lies outside the machine's travel once the sheet is placed.
+    #[error("{source_name}: {error}")]
+    OutOfTravel {
+        /// The file or `<layout_json>`.
+        source_name: String,
+        /// The part, its extent and the travel.
+        error: Box<OutOfTravel>,
+    },
 }
 
 /// Which stage a progress report is from.
@@ -288,11 +346,18 @@ pub struct JobProgress {
 pub struct SheetOutcome {
     /// The problem the plan is for.
     pub problem: Problem,
+    /// Where its sheet is on the machine, and the rule that found it.
+    pub sheet: SheetPlacement,
+    /// What the cut spec did (kerf, leads, holes left out), if the job had one.
+    pub cut: Option<CutSummary>,
     /// The final plan (metrics from the final simulation).
     pub plan: CutPlan,
-    /// What cutting each contour of `plan` did on the raster, in cut order (empty when the
-    /// thermal cost is off); overheats sit at the cuts' pierce points.
+    /// What cutting each contour of `plan` did on the raster, in cut order (thermal cost off
+    /// too: the final plan is always simulated); overheats sit at the cuts' pierce points.
     pub per_cut: Vec<CutThermal>,
+    /// Where each overheat of `plan` was counted (a pierce point or the start of a hot cut
+    /// segment), in cut order and sheet coordinates.
+    pub overheat_points: Vec<Point>,
     /// The construction's plan.
     pub constructed: CutPlan,
     /// Whether the improvement ran.
@@ -309,13 +374,40 @@ pub struct SheetOutcome {
 /// [`JobError::Dxf`] or [`JobError::Layout`], naming the file (or `<layout_json>`) and the
 /// entity or field.
 pub fn load_problem(job: &SheetJob) -> Result<Problem, JobError> {
-    let (layout, name) = match &job.layout {
-        LayoutSource::File(path) => (read_layout(path, &job.dxf)?, path.display().to_string()),
+    load_placed_problem(job).map(|(problem, _, _)| problem)
+}
+
+/// As [`load_problem`], with where the sheet is: the rule that found it and its origin (the
+/// operator's [`SheetJob::sheet_origin`] if given); checked against [`SheetJob::travel`].
+///
+/// # Errors
+/// As [`load_problem`], and [`JobError::OutOfTravel`] naming the first part outside the travel.
+pub fn load_placed_problem(
+    job: &SheetJob,
+) -> Result<(Problem, SheetPlacement, Option<CutSummary>), JobError> {
+    let ((mut layout, rule), name) = match &job.layout {
+        LayoutSource::File(path) => (
+            read_layout_with_rule(path, &job.dxf)?,
+            path.display().to_string(),
+        ),
         LayoutSource::Json(text) => {
             let name = "<layout_json>".to_string();
             let l = Layout::from_json_str(text, &name).map_err(JobError::Json)?;
-            (l, name)
+            ((l, SheetRule::Layout), name)
         }
+    };
+    if let Some(origin) = job.sheet_origin {
+        layout.origin = origin;
+    }
+    let placement = SheetPlacement {
+        rule,
+        size_mm: layout.sheet,
+        origin_mm: layout.origin,
+        origin_from: if job.sheet_origin.is_some() {
+            OriginFrom::Operator
+        } else {
+            OriginFrom::Drawing
+        },
     };
     let pierce = match job.pierce {
         PierceMode::Fixed => PierceOptions {
@@ -324,12 +416,39 @@ pub fn load_problem(job: &SheetJob) -> Result<Problem, JobError> {
         },
         PierceMode::Free => job.pierce_options,
     };
-    layout
-        .to_problem(job.precedence, &pierce)
-        .map_err(|error| JobError::Layout {
+    // With a cut spec: cut paths offset by the kerf and leads ([`crate::cut`]).
+    let (problem, cut) = match &job.cut {
+        None => layout
+            .to_problem(job.precedence, &pierce)
+            .map(|p| (p, None))
+            .map_err(|error| JobError::Layout {
+                source_name: name.clone(),
+                error,
+            })?,
+        Some(spec) => cut_problem(&layout, job.precedence, &pierce, spec)
+            .map(|(p, s)| (p, Some(s)))
+            .map_err(|error| match error {
+                CutError::Layout(error) => JobError::Layout {
+                    source_name: name.clone(),
+                    error,
+                },
+                error => JobError::Cut {
+                    source_name: name.clone(),
+                    error: Box::new(error),
+                },
+            })?,
+    };
+    if let Some(travel) = &job.travel {
+        let part_name = |i: usize| match &layout.parts[i].name {
+            Some(n) => format!("parts[{i}] ({n})"),
+            None => format!("parts[{i}]"),
+        };
+        check_travel(&problem, travel, part_name).map_err(|error| JobError::OutOfTravel {
             source_name: name,
-            error,
-        })
+            error: Box::new(error),
+        })?;
+    }
+    Ok((problem, placement, cut))
 }
 
 /// Runs the job (module docs). `progress` gets a report at every phase change and after every
@@ -373,7 +492,7 @@ pub fn run_until(
         best_overheats: plan.overheats,
     };
     progress(report(Phase::Load, &CutPlan::default()));
-    let problem = load_problem(job)?;
+    let (problem, sheet, cut) = load_placed_problem(job)?;
     phases.push(PhaseFigures {
         phase: Phase::Load,
         seconds: t0.elapsed().as_secs_f64(),
@@ -391,14 +510,14 @@ pub fn run_until(
     progress(report(Phase::Construction, &CutPlan::default()));
     let t = Instant::now();
     // The best plan's raster run with its per-cut figures, if the improvement already made it.
-    let mut simulated: Option<(CutPlan, Vec<CutThermal>)> = None;
+    let mut simulated: Option<(CutPlan, ThermalOutcome)> = None;
     // The improvement's run of its best order: it streams the frames and keeps its per-cut
     // figures, so the final simulation below is only needed if the start order wins.
-    let mut best_run: Option<(CutPlan, Vec<CutThermal>)> = None;
+    let mut best_run: Option<(CutPlan, ThermalOutcome)> = None;
     let run_best = |best: &[Cut]| {
         progress(report(Phase::Simulation, &eval.assemble(best, None)));
-        let (plan, per_cut) = simulate(&eval, best, frame_every, &mut *frame);
-        best_run = Some((plan.clone(), per_cut));
+        let (plan, thermal) = simulate(&eval, best, frame_every, &mut *frame);
+        best_run = Some((plan.clone(), thermal));
         plan
     };
     let (constructed, best) = if job.improve && !job.policy.is_thermal() {
@@ -474,7 +593,7 @@ pub fn run_until(
     };
 
     let t = Instant::now();
-    let (plan, per_cut) = match simulated {
+    let (plan, thermal) = match simulated {
         Some(done) => done,
         None => {
             progress(report(Phase::Simulation, &best));
@@ -485,8 +604,11 @@ pub fn run_until(
     progress(report(Phase::Simulation, &plan));
     Ok(SheetOutcome {
         problem,
+        sheet,
+        cut,
         plan,
-        per_cut,
+        per_cut: thermal.per_cut,
+        overheat_points: thermal.overheat_points,
         constructed,
         improved: job.improve,
         phases,
@@ -494,24 +616,28 @@ pub fn run_until(
     })
 }
 
-/// The raster run of `cuts` (none with thermal cost off) with frames every `frame_every`
-/// steps: the plan and its per-cut figures.
+/// The raster run of `cuts` with frames every `frame_every` steps: the plan and the raster's
+/// outcome (per-cut figures, overheat points). Thermal cost off (module docs), the plan keeps
+/// its idle-only cost and takes the run's overheats, maximum temperature and time.
 fn simulate(
     eval: &Evaluator,
     cuts: &[Cut],
     frame_every: u64,
     frame: &mut dyn FnMut(&Frame),
-) -> (CutPlan, Vec<CutThermal>) {
-    if !eval.cost_params().thermal {
-        return (eval.assemble(cuts, None), Vec::new());
-    }
+) -> (CutPlan, ThermalOutcome) {
     let problem = eval.problem;
     let mut sim = eval.sim().with_frames(frame_every.max(1), frame);
     for c in cuts {
-        sim.cut_contour(&problem.contours[c.contour], c.point(problem));
+        sim.cut(&problem.contours[c.contour], c.pierce);
     }
     let out = sim.finish(problem.start);
-    (eval.assemble(cuts, Some(&out)), out.per_cut)
+    let mut plan = eval.assemble(cuts, Some(&out));
+    if !eval.cost_params().thermal {
+        plan.overheats = out.overheats;
+        plan.max_temp_c = out.max_temp_c;
+        plan.time_s = out.time_s;
+    }
+    (plan, out)
 }
 
 fn figures(phase: Phase, t: Instant, plan: &CutPlan) -> PhaseFigures {
@@ -583,6 +709,13 @@ mod tests {
             .map(|c| c.pierce_overheats + c.segment_overheats)
             .sum();
         assert_eq!(per_cut, out.plan.overheats);
+        // One overheat point per overheat, each on the sheet.
+        assert_eq!(out.overheat_points.len(), out.plan.overheats);
+        let [a, b] = out.problem.sheet;
+        assert!(out
+            .overheat_points
+            .iter()
+            .all(|p| (0.0..=a).contains(&p[0]) && (0.0..=b).contains(&p[1])));
     }
 
     /// A policy that does not read the raster: its raster run goes alongside the search, and
@@ -666,5 +799,54 @@ mod tests {
         };
         let p = load_problem(&job).unwrap();
         assert!(p.contours.iter().all(|c| c.pierce_candidates.len() == 1));
+    }
+
+    /// Thermal off (module docs): idle length alone is minimised, and the final plan still
+    /// reports what its order does to the sheet (one raster run, streamed).
+    #[test]
+    fn thermal_off_minimises_idle_and_still_reports_the_overheats() {
+        let layout = crate::generator::generate(&crate::generator::GeneratorConfig {
+            seed: 7,
+            contours: 200,
+            ..Default::default()
+        });
+        let on = SheetJob {
+            layout: LayoutSource::Json(layout.to_json()),
+            improve_params: ImproveParams {
+                max_iterations: 50,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let off = SheetJob {
+            cost: CostParams {
+                thermal: parse_thermal("off").unwrap(),
+                ..Default::default()
+            },
+            ..on.clone()
+        };
+        let mut frames = Vec::new();
+        let out = run(&off, |_| {}, 100, &mut |f| frames.push(f.step)).unwrap();
+        // The cost is what was minimised: idle length and corner penalties, no heat.
+        assert_eq!(out.plan.cost, out.plan.idle_mm + out.plan.lead_in_penalty);
+        // The overheats, maximum and time are the raster's for that order.
+        let heat = Evaluator::new(&out.problem, off.thermal.clone(), CostParams::default())
+            .unwrap()
+            .evaluate(&out.plan.cuts);
+        assert_eq!(
+            (out.plan.overheats, out.plan.max_temp_c, out.plan.time_s),
+            (heat.overheats, heat.max_temp_c, heat.time_s)
+        );
+        assert!(out.plan.overheats > 0);
+        assert_eq!(out.per_cut.len(), out.plan.cuts.len());
+        assert_one_run_of_frames(&out, &off, &frames, 100);
+        // Against the thermal cost: shorter idle travel, more overheats.
+        let with_heat = run(&on, |_| {}, u64::MAX, &mut |_| {}).unwrap();
+        assert!(out.plan.idle_mm < with_heat.plan.idle_mm);
+        assert!(out.plan.overheats > with_heat.plan.overheats);
+        assert!(parse_thermal("warm")
+            .unwrap_err()
+            .to_string()
+            .contains("warm"));
     }
 }

@@ -5,7 +5,9 @@
 //! # JSON format
 //!
 //! Lengths in mm; a contour is a closed polyline whose first point is not repeated (a repeated
-//! closing point is dropped). Orientation does not matter. `pierce` is optional per contour:
+//! closing point is dropped). Orientation does not matter. Points are relative to the sheet's
+//! lower-left corner; the optional `origin` (default `[0, 0]`) is where that corner is on the
+//! machine ([`crate::placement`]): the program cuts point `p` at `origin + p`. `pierce` is optional per contour:
 //! given, it is the contour's only pierce candidate (the paper's fixed `P_ij`); absent, the
 //! candidates are chosen by [`PierceOptions`] ("free" mode). Unknown keys are errors.
 //!
@@ -46,11 +48,19 @@ use crate::problem::{distance, Contour, ContourId, ContourRole, Point, Problem};
 pub struct Layout {
     /// Sheet size `a × b`, mm; the sheet spans `[0, a] × [0, b]`.
     pub sheet: [f64; 2],
-    /// Initial tool position `P_start`, mm.
+    /// Initial tool position `P_start`, mm, relative to the sheet like the parts.
     #[serde(default)]
     pub start: Point,
+    /// Where the sheet's lower-left corner is in machine coordinates, mm
+    /// ([`crate::placement`]): the program cuts point `p` at `origin + p`. Absent = `[0, 0]`.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub origin: Point,
     /// The parts `S_i`.
     pub parts: Vec<Part>,
+}
+
+fn is_zero(p: &Point) -> bool {
+    *p == [0.0, 0.0]
 }
 
 /// One part `S_i`: an outer contour `C_i1` and its holes `C_ij`, j > 1 (seed 003 §A1).
@@ -267,6 +277,7 @@ impl Layout {
         Ok(Layout {
             sheet,
             start,
+            origin: [0.0, 0.0],
             parts,
         })
     }
@@ -386,6 +397,8 @@ impl Layout {
                     role,
                     points,
                     pierce_candidates,
+                    leads: Vec::new(),
+                    drawn: Vec::new(),
                 });
             }
         }
@@ -394,6 +407,7 @@ impl Layout {
         Ok(Problem {
             sheet: self.sheet,
             start: self.start,
+            origin: self.origin,
             contours,
             precedence,
         })
@@ -425,7 +439,8 @@ impl Layout {
         (rings, owner)
     }
 
-    fn ring_name(&self, (part, hole): RingOwner) -> String {
+    /// `parts[i] (name).outer` or `parts[i] (name).holes[h]`: how errors name a contour.
+    pub(crate) fn ring_name(&self, (part, hole): RingOwner) -> String {
         let named = match &self.parts[part].name {
             Some(n) => format!("parts[{part}] ({n})"),
             None => format!("parts[{part}]"),
@@ -650,6 +665,7 @@ mod tests {
         Layout {
             sheet: [400.0, 200.0],
             start: [0.0, 0.0],
+            origin: [0.0, 0.0],
             parts: vec![
                 Part {
                     name: Some("D1".into()),

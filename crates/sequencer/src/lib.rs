@@ -10,7 +10,10 @@
 //! - [`layout`]: the nested-layout model and its JSON format; conversion to a [`problem`] with
 //!   precedence from the containment tree and free pierce candidates (seed 003 §A1, §2).
 //! - [`containment`]: ring checks and the containment tree (seed 003 §A1 `IN` sets).
-//! - [`dxf`]: DXF input with arc flattening and chaining of loose entities (issue 7).
+//! - [`dxf`]: DXF input with arc flattening and chaining of loose entities (issue 7), and the
+//!   rule that finds the sheet.
+//! - [`placement`]: where the sheet sits on the machine (the program cuts where the drawing
+//!   says), and the machine-travel check (issue 19).
 //! - [`generator`]: seeded realistic nested layouts, 50–5000 contours (issue 7).
 //! - [`thermal`]: the discrete thermal raster of the sheet (seed 003 §A3) and our overheat
 //!   metric.
@@ -18,10 +21,14 @@
 //! - [`policy`]: the paper's greedy construction with its four `SelectContour` policies
 //!   (seed 003 §A4).
 //! - [`improve`]: precedence-safe local search and large-neighbourhood search on top.
+//! - [`kerf`], [`leads`] and [`cut`]: cutting for real (issue 19): the cut path offset by half
+//!   the kerf, lead-ins from the scrap side and lead-outs, applied to a layout's problem.
 //! - [`job`]: one job end to end (layout → plan → final simulation with raster frames), what
 //!   the `sequencer` node and `cell sheet` run.
 //! - [`toolpath`]: a plan as the `cell_msgs` `Toolpath` (travel and cut segments) and
 //!   `CutPlan` messages (notes §A6 outputs).
+//! - [`plan_svg`]: the picture of a plan (`plan.svg`): sheet, parts, cuts, lead-ins, pierces,
+//!   cut order, rapids and overheats, in machine coordinates (issue 19).
 //! - [`fixtures`]: hand-built grid instances for tests and the bench.
 //!
 //! Everything here is synchronous and free of ROS, DDS, tokio and Rerun (checked by
@@ -31,16 +38,21 @@
 #![warn(missing_docs)]
 
 pub mod containment;
+pub mod cut;
 pub mod dxf;
 pub mod generator;
 pub mod layout;
+pub mod placement;
 pub mod precedence;
 pub mod problem;
 
 pub mod cost;
 pub mod improve;
 pub mod job;
+pub mod kerf;
+pub mod leads;
 pub mod plan;
+pub mod plan_svg;
 pub mod policy;
 pub mod thermal;
 pub mod toolpath;

@@ -20,6 +20,17 @@ impl Cut {
     pub fn point(&self, problem: &Problem) -> Point {
         problem.contours[self.contour].pierce_candidates[self.pierce]
     }
+
+    /// Where the tool is when this cut is done: the end of its lead-out, or without leads the
+    /// pierce point ([`crate::problem::Contour::exit`]).
+    pub fn exit(&self, problem: &Problem) -> Point {
+        problem.contours[self.contour].exit(self.pierce)
+    }
+
+    /// The whole path of this cut, pierce to exit ([`crate::problem::Contour::cut_path`]).
+    pub fn path(&self, problem: &Problem) -> Vec<Point> {
+        problem.contours[self.contour].cut_path(self.pierce)
+    }
 }
 
 /// A whole plan with its metrics (seed 003 §A1, notes §A6).
@@ -27,9 +38,10 @@ impl Cut {
 pub struct CutPlan {
     /// The cuts in order.
     pub cuts: Vec<Cut>,
-    /// Idle (travel) length from the start through every pierce point and back, mm.
+    /// Idle (travel) length from the start through every pierce point (from each cut's exit,
+    /// with leads) and back, mm.
     pub idle_mm: f64,
-    /// Cut length (sum of contour perimeters plus pierce lead to the contour), mm.
+    /// Cut length (sum of contour perimeters plus the leads), mm.
     pub cut_mm: f64,
     /// Overheats (our metric, [`crate::thermal`] docs); 0 when thermal cost is off.
     pub overheats: usize,
@@ -50,14 +62,14 @@ impl CutPlan {
     }
 }
 
-/// Idle length of a cut sequence, start and back, mm (seed 003 §A1).
+/// Idle length of a cut sequence, start and back, mm (seed 003 §A1): from the start to the
+/// first pierce, from each cut's exit to the next pierce, and from the last exit back.
 pub fn idle_length(problem: &Problem, cuts: &[Cut]) -> f64 {
     let mut at = problem.start;
     let mut sum = 0.0;
     for c in cuts {
-        let p = c.point(problem);
-        sum += distance(at, p);
-        at = p;
+        sum += distance(at, c.point(problem));
+        at = c.exit(problem);
     }
     sum + distance(at, problem.start)
 }

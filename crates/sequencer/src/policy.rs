@@ -237,11 +237,11 @@ fn build(
             }
         };
         frontier.cut(pick.contour);
-        let p = pick.point(problem);
         if let Some(s) = sim.as_mut() {
-            s.cut_contour(&problem.contours[pick.contour], p);
+            s.cut(&problem.contours[pick.contour], pick.pierce);
         }
-        at = p;
+        // With leads the tool leaves the cut at its lead-out's end.
+        at = pick.exit(problem);
         cuts.push(pick);
     }
     if !frontier.is_finished() {

@@ -10,6 +10,20 @@
 //! Travel segments therefore add up to the plan's idle length exactly. z = 0 everywhere (the
 //! emitter owns the torch heights).
 //!
+//! **Leads** (a problem cut with kerf and leads, [`crate::cut`]): the travel ends at the
+//! lead-in's start (the pierce, on the scrap side), then a `KIND_LEAD` segment (the lead-in),
+//! the `KIND_CUT` segment once round the cut path from the entry point back to it, and, if
+//! there is an overcut or a lead-out, a second `KIND_LEAD` segment from the entry point to
+//! the exit; all at `cut_mm_s` and `power_percent` (the heat stays on from the pierce to the
+//! exit). The next travel starts at the exit. Every cut path goes round with the part on its
+//! right (outer contours clockwise, holes counter-clockwise, [`crate::kerf`]), so a
+//! controller compensating the kerf puts the tool on the left: `G41` for every contour.
+//!
+//! **Coordinates.** Both messages are in machine coordinates: every point, the start included,
+//! is the problem's sheet-relative point plus [`Problem::origin`] ([`to_machine_frame`], the
+//! one place it is added; [`crate::placement`]), so a DXF's parts are cut where the drawing
+//! puts them. `start` is relative to the sheet like every point of the problem.
+//!
 //! Pure: no ROS, no I/O.
 
 use cell_geometry::Norm;
@@ -18,11 +32,15 @@ use cell_msgs::{
     ToolpathSegment,
 };
 
+use crate::cut::CutSummary;
+use crate::leads::{loop_from_entry, Lead};
 use crate::plan::CutPlan;
 use crate::problem::{Point, Problem};
 use crate::thermal::cut_path;
 
-/// The frame the sheet coordinates are in (sheet origin at the lower-left corner).
+/// The frame of the toolpath and the cut plan: the cutting table's XY, in which the sheet's
+/// lower-left corner is at [`Problem::origin`] (module docs). The `sheet_heat` raster frames
+/// are sheet-relative: their cell (0, 0) is at that corner.
 pub const FRAME_ID: &str = "sheet";
 
 /// Feeds and power of the toolpath (module docs).
@@ -90,13 +108,21 @@ pub fn to_toolpath(
             opt.rapid_mm_s,
             0.0,
         ));
-        segments.push(segment(
-            ToolpathSegment::KIND_CUT,
-            &cut_path(contour, pierce),
-            opt.cut_mm_s,
-            opt.power_percent,
-        ));
-        at = pierce;
+        match contour.leads.get(c.pierce) {
+            Some(lead) => {
+                segments.extend(lead_segments(&contour.points, lead, opt));
+                at = lead.exit();
+            }
+            None => {
+                segments.push(segment(
+                    ToolpathSegment::KIND_CUT,
+                    &cut_path(contour, pierce),
+                    opt.cut_mm_s,
+                    opt.power_percent,
+                ));
+                at = pierce;
+            }
+        }
     }
     segments.push(segment(
         ToolpathSegment::KIND_TRAVEL,
@@ -104,6 +130,7 @@ pub fn to_toolpath(
         opt.rapid_mm_s,
         0.0,
     ));
+    to_machine_frame(problem, &mut segments);
     Toolpath {
         header: Header {
             stamp: Time::now(),
@@ -115,6 +142,26 @@ pub fn to_toolpath(
         plane_separation_mm: 0.0,
         segments,
     }
+}
+
+/// A cut with leads (module docs): the lead-in, the cut path once round from the entry point
+/// and the overcut and lead-out if any, all with the heat on.
+fn lead_segments(
+    points: &[Point],
+    lead: &Lead,
+    opt: &ToolpathOptions,
+) -> impl Iterator<Item = ToolpathSegment> {
+    let (feed, power) = (opt.cut_mm_s, opt.power_percent);
+    let lead_in = segment(ToolpathSegment::KIND_LEAD, &lead.lead_in, feed, power);
+    let cut = segment(
+        ToolpathSegment::KIND_CUT,
+        &loop_from_entry(points, lead.entry_edge, lead.entry()),
+        feed,
+        power,
+    );
+    let lead_out = (lead.lead_out.len() > 1)
+        .then(|| segment(ToolpathSegment::KIND_LEAD, &lead.lead_out, feed, power));
+    [lead_in, cut].into_iter().chain(lead_out)
 }
 
 /// The `cell_msgs/CutPlan` of `plan` on `problem` (seed 003 §A1 `R`; notes §A6): order,
@@ -150,7 +197,10 @@ pub fn to_cut_plan_msg(
             .iter()
             .map(|c| problem.contours[c.contour].part as u32)
             .collect(),
-        pierce_points: valid.iter().map(|c| point(c.point(problem))).collect(),
+        pierce_points: valid
+            .iter()
+            .map(|c| point(problem.to_machine(c.point(problem))))
+            .collect(),
         policy: policy.into(),
         improved,
         idle_length_mm: plan.idle_mm,
@@ -158,6 +208,27 @@ pub fn to_cut_plan_msg(
         overheats: plan.overheats as u32,
         max_temperature_c: f64::from(plan.max_temp_c - ambient_c).max(0.0),
         cost: plan.cost,
+        ..Default::default()
+    }
+}
+
+/// The cut plan message with the kerf and lead lengths of the job's cut (`None`: left 0, a
+/// plan cut on the drawn contours).
+pub fn with_cut(mut msg: CutPlanMsg, cut: Option<&CutSummary>) -> CutPlanMsg {
+    if let Some(c) = cut {
+        msg.kerf_mm = c.kerf_mm;
+        msg.path_offset_mm = c.path_offset_mm;
+        msg.lead_in_mm = c.lead_in_mm;
+        msg.lead_out_mm = c.lead_out_mm;
+    }
+    msg
+}
+
+/// Moves sheet-relative segments to machine coordinates: `origin + p` at every point
+/// ([`Problem::to_machine`]; module docs).
+pub fn to_machine_frame(problem: &Problem, segments: &mut [ToolpathSegment]) {
+    for p in segments.iter_mut().flat_map(|s| s.points.iter_mut()) {
+        [p.x, p.y] = problem.to_machine([p.x, p.y]);
     }
 }
 

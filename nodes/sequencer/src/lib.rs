@@ -35,14 +35,16 @@ use cell_runtime::{CellNode, Publisher, QosPreset};
 use serde::{Deserialize, Serialize};
 
 use cell_sequencer::cost::CostParams;
+use cell_sequencer::cut::spec_for_profile;
 use cell_sequencer::dxf::DxfOptions;
 use cell_sequencer::improve::ImproveParams;
 use cell_sequencer::job::{
     self, JobProgress, LayoutSource, Phase, PierceMode, SheetJob, SheetOutcome,
 };
 use cell_sequencer::layout::PierceOptions;
+use cell_sequencer::placement::Travel;
 use cell_sequencer::thermal::{Frame, ThermalParams};
-use cell_sequencer::toolpath::{to_cut_plan_msg, to_toolpath, ToolpathOptions, FRAME_ID};
+use cell_sequencer::toolpath::{to_cut_plan_msg, to_toolpath, with_cut, ToolpathOptions, FRAME_ID};
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`; nested keys as
 /// `thermal.t_max_c`). Physical units in the names; defaults in `config/sequencer.yaml`.
@@ -60,8 +62,17 @@ pub struct SequencerParams {
     /// Improvement LNS iterations.
     pub max_iterations: usize,
     /// Machine profile when a goal's is empty: a name under `config/machines` or a YAML path;
-    /// its feed limit caps the toolpath feeds.
+    /// its feed limit caps the toolpath feeds and a part outside its X/Y travel fails the goal.
     pub machine_profile: String,
+    /// `[x, y]`, mm: place the sheet's lower-left corner there on the machine (machine =
+    /// sheet-relative + x, y); empty: the drawing's own coordinates
+    /// ([`cell_sequencer::placement`]).
+    pub sheet_origin: Vec<f64>,
+    /// The sheet's material as the profile's `cutting:` kerf table names it; empty: the
+    /// section's `default_material` ([`cell_sequencer::cut::spec_for_profile`]).
+    pub material: String,
+    /// The sheet's thickness, mm; 0: the section's `default_material`.
+    pub thickness_mm: f64,
     /// Cutting power in the toolpath, %.
     pub power_percent: f64,
     /// Send improvement feedback every this many iterations (phase changes always).
@@ -79,7 +90,8 @@ pub struct SequencerParams {
     pub pierce_options: PierceOptions,
     /// Thermal raster constants (seed 003 §A3; `cell_sequencer::thermal`).
     pub thermal: ThermalParams,
-    /// Cost weights (`cell_sequencer::cost`).
+    /// Cost weights (`cell_sequencer::cost`); `cost.thermal: false` is the thermal-off mode
+    /// (idle length alone, the final plan still simulated: `cell_sequencer::job` docs).
     pub cost: CostParams,
     /// How long a finished goal's result waits for the client to ask for it, s.
     pub result_timeout_s: f64,
@@ -95,6 +107,9 @@ impl Default for SequencerParams {
             time_budget_s: 5.0,
             max_iterations: ImproveParams::default().max_iterations,
             machine_profile: "linuxcnc-plasma".into(),
+            sheet_origin: Vec::new(),
+            material: String::new(),
+            thickness_mm: 0.0,
             power_percent: 100.0,
             feedback_every: 10,
             frame_every_steps: 200,
@@ -144,7 +159,23 @@ pub fn goal_to_job(
     };
     let machine = MachineProfile::resolve(&or(&goal.machine_profile, &p.machine_profile))
         .map_err(|e| format!("machine_profile: {e}"))?;
+    let sheet_origin = match p.sheet_origin[..] {
+        [] => None,
+        [x, y] if x.is_finite() && y.is_finite() => Some([x, y]),
+        _ => {
+            return Err(format!(
+                "sheet_origin {:?}: expected [x, y] in mm (finite) or empty",
+                p.sheet_origin
+            ))
+        }
+    };
+    let material = (!p.material.is_empty()).then_some(p.material.as_str());
+    let thickness = (p.thickness_mm != 0.0).then_some(p.thickness_mm);
+    let cut = spec_for_profile(&machine, material, thickness)
+        .map_err(|e| format!("material/thickness_mm: {e}"))?
+        .map(|(spec, _)| spec);
     let job = SheetJob {
+        cut,
         layout,
         dxf: DxfOptions {
             chord_tol_mm: p.dxf_chord_tol_mm,
@@ -164,6 +195,8 @@ pub fn goal_to_job(
         thermal: p.thermal.clone(),
         cost: p.cost.clone(),
         seed: goal.seed,
+        sheet_origin,
+        travel: Some(Travel::of(&machine)),
     };
     let opt = ToolpathOptions {
         cut_mm_s: p.thermal.cut_speed_mm_s.min(machine.max_feed_mm_s),
@@ -226,7 +259,7 @@ fn log_result(
             .zip(&out.per_cut)
             .filter(|(_, t)| t.pierce_overheats + t.segment_overheats > 0)
             .map(|(c, t)| {
-                let p = c.point(&out.problem);
+                let p = out.problem.to_machine(c.point(&out.problem));
                 let n = (t.pierce_overheats + t.segment_overheats) as f32;
                 ([p[0] as f32, p[1] as f32, 0.0], 2.0 + n)
             })
@@ -359,13 +392,16 @@ impl GoalHandler for Sequencer {
             Err(e) => return Ok(failed(&job_id, e.to_string())),
         };
         let toolpath = to_toolpath(&out.problem, &out.plan, &job_id, &opt);
-        let plan = to_cut_plan_msg(
-            &out.problem,
-            &out.plan,
-            &job_id,
-            job::policy_name(sheet_job.policy),
-            out.improved,
-            sheet_job.thermal.ambient_c,
+        let plan = with_cut(
+            to_cut_plan_msg(
+                &out.problem,
+                &out.plan,
+                &job_id,
+                job::policy_name(sheet_job.policy),
+                out.improved,
+                sheet_job.thermal.ambient_c,
+            ),
+            out.cut.as_ref(),
         );
         let canceled = ctx.is_canceled();
         if !canceled {
@@ -374,7 +410,7 @@ impl GoalHandler for Sequencer {
         }
         let message = format!(
             "sequenced {job_id}: {} contours, {}{}, idle {:.1} mm, cut {:.1} mm, \
-             {} overheats, cost {:.1} ({:.1} s)",
+             {} overheats, cost {:.1} ({:.1} s); {}",
             out.problem.contours.len(),
             plan.policy,
             if out.improved { " + improvement" } else { "" },
@@ -382,8 +418,27 @@ impl GoalHandler for Sequencer {
             plan.cut_length_mm,
             plan.overheats,
             plan.cost,
-            out.seconds
+            out.seconds,
+            out.sheet
         );
+        // The kerf and leads it was cut with, and the holes it left out.
+        let message = match &out.cut {
+            Some(c) => {
+                for w in &c.warnings {
+                    tracing::warn!("sequence_sheet: {job_id}: {w}");
+                }
+                format!(
+                    "{message}; kerf {} mm ({:?}), lead-in {} mm, lead-out {} mm, {} holes \
+                     left out",
+                    c.kerf_mm,
+                    c.compensation,
+                    c.lead_in_mm,
+                    c.lead_out_mm,
+                    c.warnings.len()
+                )
+            }
+            None => message,
+        };
         log_result(&self.node, &out, &toolpath, &plan, &message);
         let message = if canceled {
             format!("canceled; best plan so far: {message}")
@@ -512,6 +567,57 @@ mod tests {
     }
 
     #[test]
+    fn sheet_origin_and_the_profiles_travel_reach_the_job() {
+        let goal = SequenceSheetGoal {
+            layout_json: "{}".into(),
+            ..Default::default()
+        };
+        let (job, _) = goal_to_job(&goal, &SequencerParams::default()).unwrap();
+        assert_eq!(job.sheet_origin, None, "empty: the drawing's own placement");
+        let travel = job.travel.expect("the profile's travel is checked");
+        assert_eq!(
+            (travel.x_mm, travel.y_mm),
+            (Some([0.0, 1250.0]), Some([0.0, 1250.0]))
+        );
+        let p = SequencerParams {
+            sheet_origin: vec![100.0, -50.0],
+            ..Default::default()
+        };
+        assert_eq!(
+            goal_to_job(&goal, &p).unwrap().0.sheet_origin,
+            Some([100.0, -50.0])
+        );
+        for bad in [vec![1.0], vec![1.0, 2.0, 3.0], vec![f64::NAN, 0.0]] {
+            let p = SequencerParams {
+                sheet_origin: bad,
+                ..Default::default()
+            };
+            let e = goal_to_job(&goal, &p).unwrap_err();
+            assert!(e.starts_with("sheet_origin ["), "{e}");
+        }
+    }
+
+    /// `-p cost.thermal:=false` (the thermal-off mode) reaches the job.
+    #[test]
+    fn thermal_off_reaches_the_job() {
+        let args = cell_runtime::args::NodeArgs::parse(["--ros-args", "-p", "cost.thermal:=false"])
+            .unwrap();
+        let p: SequencerParams =
+            cell_runtime::params::ParamSources::collect(&args.ros, "/", "sequencer")
+                .unwrap()
+                .parse()
+                .unwrap();
+        let goal = SequenceSheetGoal {
+            layout_json: "{}".into(),
+            ..Default::default()
+        };
+        let (job, _) = goal_to_job(&goal, &p).unwrap();
+        assert!(!job.cost.thermal);
+        let (default_job, _) = goal_to_job(&goal, &SequencerParams::default()).unwrap();
+        assert!(default_job.cost.thermal);
+    }
+
+    #[test]
     fn frames_become_heat_maps_in_absolute_degrees() {
         let data = [0.0f32, 10.0, 280.0, 0.0, 0.0, 0.0];
         let f = Frame {
@@ -528,5 +634,34 @@ mod tests {
         assert_eq!(hm.data[2], 300.0);
         assert_eq!(hm.origin.x, 2.0);
         assert_eq!(hm.threshold, 300.0);
+    }
+
+    /// The profile's `cutting:` section reaches the job: its default material, or the
+    /// `material` / `thickness_mm` parameters; a material its kerf table lacks is named.
+    #[test]
+    fn material_and_thickness_pick_the_kerf() {
+        let goal = SequenceSheetGoal {
+            layout_json: "{}".into(),
+            ..Default::default()
+        };
+        let (job, _) = goal_to_job(&goal, &SequencerParams::default()).unwrap();
+        let cut = job.cut.expect("linuxcnc-plasma has a cutting: section");
+        assert_eq!(cut.kerf_mm, 1.5, "its default: mild steel, 6 mm");
+        let p = SequencerParams {
+            material: "mild_steel".into(),
+            thickness_mm: 3.0,
+            ..Default::default()
+        };
+        let (job, _) = goal_to_job(&goal, &p).unwrap();
+        assert!(job.cut.unwrap().kerf_mm < 1.5);
+        let p = SequencerParams {
+            material: "unobtainium".into(),
+            ..Default::default()
+        };
+        let e = goal_to_job(&goal, &p).unwrap_err();
+        assert!(
+            e.starts_with("material/thickness_mm:") && e.contains("unobtainium"),
+            "{e}"
+        );
     }
 }

@@ -22,7 +22,7 @@ impl Search<'_, '_> {
     /// corner penalty.
     pub(super) fn term_without_proxy(&self, i: usize) -> f64 {
         let prev = if i == 0 { usize::MAX } else { i - 1 };
-        let edge = dist(self.point(prev), self.point(i));
+        let edge = dist(self.exit(prev), self.point(i));
         match self.seq.get(i) {
             Some(&c) => edge + self.eval.corner_penalty(c),
             None => edge,

@@ -16,12 +16,13 @@ use super::search::Search;
 use super::Progress;
 
 impl Search<'_, '_> {
-    /// One remove-and-reinsert step; `false` (and the order unchanged) if no feasible
-    /// reinsertion was found.
-    pub(super) fn lns_step(&mut self, rng: &mut ChaCha8Rng, k: usize) -> bool {
+    /// One remove-and-reinsert step: the positions `[a, b]` it changed (the order outside them
+    /// is as before), or `None` (and the order unchanged) if no feasible reinsertion was
+    /// found.
+    pub(super) fn lns_step(&mut self, rng: &mut ChaCha8Rng, k: usize) -> Option<[usize; 2]> {
         let n = self.seq.len();
         if n < 2 {
-            return false;
+            return None;
         }
         let problem = self.eval.problem;
         let rules = &problem.precedence;
@@ -91,7 +92,7 @@ impl Search<'_, '_> {
                 let prev = if q == 0 {
                     problem.start
                 } else {
-                    self.point(q - 1)
+                    self.exit(q - 1)
                 };
                 let next = self.point(q);
                 for (kk, &p) in problem.contours[c].pierce_candidates.iter().enumerate() {
@@ -99,7 +100,8 @@ impl Search<'_, '_> {
                         contour: c,
                         pierce: kk,
                     };
-                    let mut d = dist(prev, p) + dist(p, next) - dist(prev, next)
+                    let out = problem.contours[c].exit(kk);
+                    let mut d = dist(prev, p) + dist(out, next) - dist(prev, next)
                         + self.eval.corner_penalty(cut);
                     if self.proxy_w > 0.0 {
                         let mut gap = 0.0;
@@ -124,7 +126,7 @@ impl Search<'_, '_> {
                 self.seq = saved;
                 let n = self.seq.len();
                 self.reindex(0, n - 1);
-                return false;
+                return None;
             };
             self.seq.insert(
                 q,
@@ -137,12 +139,18 @@ impl Search<'_, '_> {
             let len = self.seq.len();
             self.reindex(q, len - 1);
         }
-        if rules.check_order(&self.order()).is_err() {
-            self.seq = saved;
-            let n = self.seq.len();
-            self.reindex(0, n - 1);
-            return false;
+        // Only positions a..=b changed: the local check is exact (`feasible_span`).
+        let (mut a, mut b) = (removed[0], removed[removed.len() - 1]);
+        for c in &out {
+            a = a.min(self.pos[c.contour]);
+            b = b.max(self.pos[c.contour]);
         }
+        if !self.feasible_span(a, b) {
+            self.seq = saved;
+            self.reindex(a, b);
+            return None;
+        }
+        debug_assert_eq!(rules.check_order(&self.order()), Ok(()));
         // Wake the ends of every edge the step changed (for both sweeps); `n` is the start.
         let at = |seq: &[Cut], i: usize| seq.get(i).map_or(n, |c| c.contour);
         let mut changed: Vec<usize> = Vec::with_capacity(3 * out.len() + 2 * removed.len());
@@ -159,7 +167,7 @@ impl Search<'_, '_> {
         for c in changed {
             self.wake_contour(c);
         }
-        true
+        Some([a, b])
     }
 }
 
@@ -180,33 +188,57 @@ pub(super) fn search(
     let mut s = Search::new(eval, start, params);
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     s.local_search(params, true, &deadline);
-    let mut cur = s.total();
+    // With the heat proxy a step's cost is the cached terms outside the positions it changed
+    // plus the changed ones recomputed (a whole sum would cost O(n · proxy_lookback) per
+    // step); the polish of the idle-only search changes any position, so it sums them all.
+    let incremental = s.proxy_w > 0.0;
+    if incremental {
+        s.refresh_cache(0, n - 1);
+    }
+    let mut cur = if incremental {
+        s.term_sum[n + 1]
+    } else {
+        s.total()
+    };
     let mut best = (cur, s.seq.clone());
     for iteration in 0..params.max_iterations {
         if deadline() {
             break;
         }
         let saved = s.seq.clone();
-        if s.lns_step(&mut rng, params.lns_remove) {
-            if s.proxy_w == 0.0 {
+        if let Some([a, b]) = s.lns_step(&mut rng, params.lns_remove) {
+            let cost = if incremental {
+                let end = s.span_end(b);
+                s.term_sum[a] + s.span_cost(a, b) + (s.term_sum[n + 1] - s.term_sum[end + 1])
+            } else {
                 // Cheap O(1)-delta moves: polish every perturbation (iterated local search).
                 for _ in 0..20 {
                     if !s.neighbour_sweep() {
                         break;
                     }
                 }
-            }
-            let cost = s.total();
+                s.total()
+            };
+            debug_assert!((cost - s.total()).abs() <= 1e-6 * (1.0 + cost.abs()));
             let idle = s.span_idle(0, n - 1);
             if cost <= cur + 1e-9 && (idle <= s.idle_cap || idle <= s.idle) {
-                cur = cost;
                 s.idle = idle;
-                if cost < best.0 - 1e-9 {
-                    best = (cost, s.seq.clone());
+                cur = if incremental {
+                    s.refresh_cache(a, b);
+                    s.term_sum[n + 1]
+                } else {
+                    cost
+                };
+                if cur < best.0 - 1e-9 {
+                    best = (cur, s.seq.clone());
                 }
             } else {
                 s.seq = saved;
-                s.reindex(0, n - 1);
+                if incremental {
+                    s.reindex(a, b);
+                } else {
+                    s.reindex(0, n - 1);
+                }
             }
         }
         feedback(Progress {

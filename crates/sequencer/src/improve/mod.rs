@@ -38,8 +38,9 @@
 //! per move would cost a whole simulation each; the proxy keeps a move's evaluation local to
 //! the moved span.
 //!
-//! **Pierce term** of the proxy: a cut `b` pierced within `(overheat_radius_cells + 1) ·
-//! cell_mm` of the polyline of one of its look-back cuts `a` costs `(w_overheat_mm +
+//! **Pierce term** of the proxy: a cut `b` pierced where the overheat test's window (the raster
+//! cells within `overheat_radius_cells` of the pierce point's cell) holds the polyline of one
+//! of its look-back cuts `a` costs `(w_overheat_mm +
 //! hot_penalty_mm) · proxy_weight` while `a`'s kerf is still above `t_max`, i.e. while the
 //! cutting in between (as above) is below `cell_mm · ln((t_melt − ambient)/(t_max − ambient)) /
 //! −ln(k_loss)` (a kerf at melting temperature decaying by `k_loss` per step alone; 1290 mm with

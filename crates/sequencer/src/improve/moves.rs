@@ -25,11 +25,13 @@ impl Search<'_, '_> {
         self.edge(l - 1, h) + self.edge(l, h + 1) - self.edge(l - 1, l) - self.edge(h, h + 1)
     }
 
-    /// Idle length of the edge from position `a` to position `b` (−1 and `n`: the start).
+    /// Idle length of the edge from position `a` (its exit) to position `b` (its pierce
+    /// point); −1 and `n`: the start.
     pub(super) fn edge(&self, a: isize, b: isize) -> f64 {
         let n = self.seq.len() as isize;
         let at = |i: isize| if i >= n { self.pt(-1) } else { self.pt(i) };
-        dist(at(a), at(b))
+        let from = if a < 0 { usize::MAX } else { a as usize };
+        dist(self.exit(from), at(b))
     }
 
     /// Applies a move on `lo..=hi`, keeps it if feasible and cheaper, else undoes it.

@@ -57,13 +57,12 @@ pub(super) fn exposure_table(
 }
 
 /// The proxy's pierce table (module docs): for each contour `b` and pierce candidate `k`, the
-/// contours among `b`'s neighbours whose polyline passes within `reach` mm of it.
-pub(super) fn pierce_table(
-    eval: &Evaluator,
-    near: &[Vec<ContourId>],
-    reach: f64,
-) -> Vec<Vec<Vec<ContourId>>> {
+/// contours among `b`'s neighbours whose polyline passes through the raster cells the overheat
+/// test reads at that pierce point (the cells within `overheat_radius_cells` of its cell).
+pub(super) fn pierce_table(eval: &Evaluator, near: &[Vec<ContourId>]) -> Vec<Vec<Vec<ContourId>>> {
     let problem = eval.problem;
+    let tp = eval.thermal_params();
+    let (cell, r) = (tp.cell_mm, tp.overheat_radius_cells as f64);
     problem
         .contours
         .iter()
@@ -72,19 +71,45 @@ pub(super) fn pierce_table(
             cb.pierce_candidates
                 .iter()
                 .map(|&p| {
+                    // The window: (2r + 1)² cells round the pierce point's cell.
+                    let lo = [p[0], p[1]].map(|v| ((v / cell).floor() - r) * cell);
+                    let hi = lo.map(|v| v + (2.0 * r + 1.0) * cell);
                     near[b]
                         .iter()
                         .copied()
                         .filter(|&a| {
                             let pts = &problem.contours[a].points;
                             let n = pts.len();
-                            (0..n).any(|i| seg_dist(p, pts[i], pts[(i + 1) % n]) < reach)
+                            (0..n).any(|i| segment_meets_box(pts[i], pts[(i + 1) % n], lo, hi))
                         })
                         .collect()
                 })
                 .collect()
         })
         .collect()
+}
+
+/// Whether the segment `a–b` meets the box `lo..=hi` (Liang–Barsky clipping).
+pub(super) fn segment_meets_box(a: Point, b: Point, lo: Point, hi: Point) -> bool {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..2 {
+        for (q, pk) in [(a[k] - lo[k], -d[k]), (hi[k] - a[k], d[k])] {
+            if pk == 0.0 {
+                if q < 0.0 {
+                    return false;
+                }
+            } else {
+                let t = q / pk;
+                if pk < 0.0 {
+                    t0 = t0.max(t);
+                } else {
+                    t1 = t1.min(t);
+                }
+            }
+        }
+    }
+    t0 <= t1
 }
 
 impl Search<'_, '_> {

@@ -33,7 +33,7 @@ pub(super) struct Search<'e, 'p> {
     /// overheat metric checks (pierce and segment starts) within `proxy_radius_mm` of `a`.
     pub(super) exposure: Vec<Vec<(ContourId, f64)>>,
     pub(super) lookback: usize,
-    /// `pierce_near[b][k]`: contours whose polyline passes within the overheat test's reach
+    /// `pierce_near[b][k]`: contours whose polyline passes through the overheat test's window
     /// of candidate `k` of `b` (empty without the proxy).
     pub(super) pierce_near: Vec<Vec<Vec<ContourId>>>,
     /// `related[b]`: bit `a % 64` set for every contour `a` in `exposure[b]` or any of
@@ -67,6 +67,10 @@ pub(super) struct Search<'e, 'p> {
     /// difference of two prefix sums.
     pub(super) term_cache: Vec<f64>,
     pub(super) term_sum: Vec<f64>,
+    /// Per group, the [`Search::feasible_span`] check that last saw one of its runs start.
+    pub(super) run_seen: Vec<u64>,
+    /// The running [`Search::feasible_span`] check.
+    pub(super) run_epoch: u64,
 }
 
 impl<'e, 'p> Search<'e, 'p> {
@@ -111,9 +115,11 @@ impl<'e, 'p> Search<'e, 'p> {
                     a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal)
                 });
             }
-            d.truncate(k);
+            let d = &mut d[..k];
             d.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-            d.into_iter().map(|(_, j)| j).collect::<Vec<_>>()
+            // Collected from the slice: `into_iter().collect()` would keep the whole
+            // n-entry buffer per list (in-place collection), ~80 KB each at 5000 contours.
+            d.iter().map(|&(_, j)| j).collect::<Vec<_>>()
         };
         let near = (0..n)
             .map(|c| nearest_to(centre(&bbox[c]), Some(c), NEAR_IDLE))
@@ -123,11 +129,9 @@ impl<'e, 'p> Search<'e, 'p> {
             let wide: Vec<Vec<ContourId>> = (0..n)
                 .map(|c| nearest_to(centre(&bbox[c]), Some(c), PROXY_NEAR))
                 .collect();
-            let tp = eval.thermal_params();
-            let reach = (tp.overheat_radius_cells as f64 + 1.0) * tp.cell_mm;
             (
                 exposure_table(eval, &wide, params.proxy_radius_mm),
-                pierce_table(eval, &wide, reach),
+                pierce_table(eval, &wide),
             )
         } else {
             (vec![Vec::new(); n], Vec::new())
@@ -189,6 +193,8 @@ impl<'e, 'p> Search<'e, 'p> {
             proxy_sum: vec![0.0; n + 1],
             term_cache: vec![0.0; n + 1],
             term_sum: vec![0.0; n + 2],
+            run_seen: vec![0; problem.precedence.groups.len()],
+            run_epoch: 0,
             pierce_near,
             hot_mm,
             pierce_w: (eval.cost_params().w_overheat_mm + eval.cost_params().hot_penalty_mm)
@@ -214,6 +220,16 @@ impl Search<'_, '_> {
         }
     }
 
+    /// Where the tool leaves the cut at position `i` (its lead-out's end; without leads its
+    /// pierce point), the start for `usize::MAX` and `n`: idle edges run from here.
+    pub(super) fn exit(&self, i: usize) -> Point {
+        if i == usize::MAX || i >= self.seq.len() {
+            self.eval.problem.start
+        } else {
+            self.seq[i].exit(self.eval.problem)
+        }
+    }
+
     /// Point at position `i`, with −1 and `n` the start point.
     pub(super) fn pt(&self, i: isize) -> Point {
         if i < 0 {
@@ -233,7 +249,7 @@ impl Search<'_, '_> {
         (lo..=end)
             .map(|i| {
                 let prev = if i == 0 { usize::MAX } else { i - 1 };
-                dist(self.point(prev), self.point(i))
+                dist(self.exit(prev), self.point(i))
             })
             .sum()
     }
@@ -260,25 +276,38 @@ impl Search<'_, '_> {
         }
     }
 
-    /// Local feasibility after permuting `lo..=hi` of a feasible order (module docs).
-    pub(super) fn feasible_span(&self, lo: usize, hi: usize) -> bool {
+    /// Local feasibility after permuting `lo..=hi` of a feasible order (module docs): no
+    /// contour of the span before one of its predecessors, and every group still one run.
+    ///
+    /// The order outside the span is unchanged and was feasible, so whether a position starts
+    /// a group's run can only have changed at `lo..=hi + 1`. There a group may start a run at
+    /// most once, and not at all if its run covers `lo − 1`: O(span), however large the
+    /// groups (a perforated panel's group holds hundreds of contours).
+    pub(super) fn feasible_span(&mut self, lo: usize, hi: usize) -> bool {
         let rules = &self.eval.problem.precedence;
         for i in lo..=hi {
             let c = self.seq[i].contour;
             if rules.predecessors[c].iter().any(|&p| self.pos[p] > i) {
                 return false;
             }
-            if let Some(g) = self.group_of[c] {
-                let members = &rules.groups[g];
-                let (mut a, mut b) = (usize::MAX, 0);
-                for &m in members {
-                    a = a.min(self.pos[m]);
-                    b = b.max(self.pos[m]);
-                }
-                if b - a + 1 != members.len() {
-                    return false;
-                }
+        }
+        if rules.groups.is_empty() {
+            return true;
+        }
+        self.run_epoch += 1;
+        let epoch = self.run_epoch;
+        let group_at = |i: usize| self.group_of[self.seq[i].contour];
+        let covering = if lo > 0 { group_at(lo - 1) } else { None };
+        for p in lo..=(hi + 1).min(self.seq.len() - 1) {
+            let Some(g) = group_at(p) else { continue };
+            if p > 0 && group_at(p - 1) == Some(g) {
+                continue;
             }
+            // A run of `g` starts at `p`.
+            if covering == Some(g) || self.run_seen[g] == epoch {
+                return false;
+            }
+            self.run_seen[g] = epoch;
         }
         true
     }

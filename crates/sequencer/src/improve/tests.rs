@@ -175,3 +175,129 @@ proptest! {
         prop_assert_eq!(again, better);
     }
 }
+
+/// The local feasibility check of a permuted span agrees with the whole-order check, groups
+/// of any size included (a perforated panel's group holds hundreds of contours).
+#[test]
+fn feasible_span_agrees_with_the_whole_order_check() {
+    use rand::{Rng, SeedableRng};
+    let layout = crate::generator::generate(&crate::generator::GeneratorConfig {
+        seed: 3,
+        contours: 120,
+        ..Default::default()
+    });
+    let problem = layout
+        .to_problem(
+            PrecedenceMode::Strict,
+            &crate::layout::PierceOptions::default(),
+        )
+        .unwrap();
+    let eval = Evaluator::new(&problem, ThermalParams::default(), CostParams::default()).unwrap();
+    let start = crate::policy::construct_cuts(&eval, Policy::Nearest, 0).unwrap();
+    let mut s = Search::new(&eval, &start, &quick());
+    let n = s.seq.len();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let (mut feasible, mut infeasible) = (0, 0);
+    for _ in 0..3000 {
+        let lo = rng.random_range(0..n);
+        let hi = (lo + rng.random_range(1..12)).min(n - 1);
+        let saved = s.seq.clone();
+        // A random permutation of the span: a swap, a rotation or a reversal.
+        match rng.random_range(0..3) {
+            0 => s.seq.swap(lo, hi),
+            1 => s.seq[lo..=hi].rotate_left(1),
+            _ => s.seq[lo..=hi].reverse(),
+        }
+        s.reindex(lo, hi);
+        let local = s.feasible_span(lo, hi);
+        assert_eq!(
+            local,
+            problem.precedence.check_order(&s.order()).is_ok(),
+            "{lo}..={hi}"
+        );
+        if local {
+            feasible += 1;
+        } else {
+            infeasible += 1;
+        }
+        s.seq = saved;
+        s.reindex(lo, hi);
+    }
+    assert!(
+        feasible > 100 && infeasible > 100,
+        "{feasible} {infeasible}"
+    );
+}
+
+/// The pierce table's test of a polyline edge against the overheat test's window of cells.
+#[test]
+fn segments_meet_boxes_where_they_cross_them() {
+    use super::proxy::segment_meets_box;
+    let (lo, hi) = ([0.0, 0.0], [12.0, 12.0]);
+    assert!(
+        segment_meets_box([-5.0, 6.0], [20.0, 6.0], lo, hi),
+        "through"
+    );
+    assert!(segment_meets_box([3.0, 3.0], [4.0, 5.0], lo, hi), "inside");
+    assert!(
+        segment_meets_box([-1.0, 11.0], [1.0, 13.0], lo, hi),
+        "across a corner"
+    );
+    assert!(
+        !segment_meets_box([-1.0, 12.5], [1.0, 14.5], lo, hi),
+        "past a corner"
+    );
+    assert!(
+        !segment_meets_box([13.0, -5.0], [13.0, 20.0], lo, hi),
+        "beside it"
+    );
+    assert!(
+        segment_meets_box([12.0, -5.0], [12.0, 20.0], lo, hi),
+        "along its edge"
+    );
+}
+
+/// Issue 19's target on dense perforated layouts (the bench has the 5000-contour one): at
+/// least 50 % fewer overheats than the nearest order within 1.5× its idle length, with a fixed
+/// iteration budget.
+#[test]
+fn dense_perforated_layouts_halve_the_overheats_within_the_idle_budget() {
+    for seed in [1, 4] {
+        let layout = crate::generator::generate_perforated(&crate::generator::PerforatedConfig {
+            seed,
+            contours: 300,
+            ..Default::default()
+        });
+        let problem = layout
+            .to_problem(
+                PrecedenceMode::Strict,
+                &crate::layout::PierceOptions::default(),
+            )
+            .unwrap();
+        let eval =
+            Evaluator::new(&problem, ThermalParams::default(), CostParams::default()).unwrap();
+        let cuts = crate::policy::construct_cuts(&eval, Policy::Nearest, 1).unwrap();
+        let params = ImproveParams {
+            max_iterations: 200,
+            ..Default::default()
+        };
+        let (nearest, better) = improved_cuts(&eval, &cuts, &params).unwrap();
+        assert!(
+            nearest.overheats >= 50,
+            "seed {seed}: a dense layout overheats"
+        );
+        assert!(
+            2 * better.overheats <= nearest.overheats,
+            "seed {seed}: {} overheats against nearest's {}",
+            better.overheats,
+            nearest.overheats
+        );
+        assert!(
+            better.idle_mm <= 1.5 * nearest.idle_mm,
+            "seed {seed}: idle {} against nearest's {}",
+            better.idle_mm,
+            nearest.idle_mm
+        );
+        assert_eq!(problem.precedence.check_order(&better.order()), Ok(()));
+    }
+}

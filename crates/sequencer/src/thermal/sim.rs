@@ -59,6 +59,9 @@ pub struct ThermalOutcome {
     pub cells_updated: u64,
     /// Per contour, in cutting order.
     pub per_cut: Vec<CutThermal>,
+    /// Where each overheat was counted, in cutting order: the pierce point or the start of a
+    /// hot cut segment (for pictures of the plan, e.g. `plan.svg`).
+    pub overheat_points: Vec<Point>,
 }
 
 /// The live raster while a sheet is cut (seed 003 §A3). Policies query it; the plan evaluator
@@ -107,6 +110,7 @@ pub struct ThermalSim<'a> {
     pub(super) tool: Point,
     pub(super) overheats: usize,
     pub(super) per_cut: Vec<CutThermal>,
+    pub(super) overheat_points: Vec<Point>,
     pub(super) observer: Option<(u64, FrameObserver<'a>)>,
 }
 
@@ -172,6 +176,7 @@ impl<'a> ThermalSim<'a> {
             tool: start,
             overheats: 0,
             per_cut: Vec::new(),
+            overheat_points: Vec::new(),
             observer: None,
         })
     }
@@ -308,8 +313,27 @@ impl<'a> ThermalSim<'a> {
     /// Pierces `contour` at `pierce` (after an idle move there) and cuts once round it,
     /// returning what the overheat metric counted (module docs).
     pub fn cut_contour(&mut self, contour: &Contour, pierce: Point) -> CutThermal {
+        self.cut_path_from(&cut_path(contour, pierce), false)
+    }
+
+    /// Cuts `contour` from its pierce candidate `k`: with leads ([`Contour::cut_path`]) the
+    /// whole path, lead-in and lead-out heated too, one spread step per `cell_mm` of path
+    /// (the flattened arcs of the cut path and the leads are much shorter than a cell);
+    /// without, [`ThermalSim::cut_contour`] from the pierce point.
+    pub fn cut(&mut self, contour: &Contour, k: usize) -> CutThermal {
+        if contour.leads.is_empty() {
+            self.cut_contour(contour, contour.pierce_candidates[k])
+        } else {
+            self.cut_path_from(&contour.cut_path(k), true)
+        }
+    }
+
+    /// Pierces at `path[0]` (after an idle move there), cuts along `path` and leaves the tool
+    /// at its end. `by_length`: one spread step per `cell_mm` of path; else per edge, at
+    /// least one step per edge.
+    fn cut_path_from(&mut self, path: &[Point], by_length: bool) -> CutThermal {
+        let pierce = path[0];
         self.travel_to(pierce);
-        let path = cut_path(contour, pierce);
         // The overheat test, before this contour adds heat.
         let t_max = self.params.t_max_c;
         let pierce_temp_c = self.hot_near_c(pierce);
@@ -318,12 +342,17 @@ impl<'a> ThermalSim<'a> {
             pierce_overheats: usize::from(pierce_temp_c >= t_max),
             segment_overheats: 0,
         };
+        if result.pierce_overheats > 0 {
+            self.overheat_points.push(pierce);
+        }
         let seg = self.params.segment_mm;
-        let total = polyline_length(&path, Norm::Hypot);
+        let total = polyline_length(path, Norm::Hypot);
         let mut s = seg;
         while s < total {
-            if self.hot_near_c(point_along(&path, s)) >= t_max {
+            let at = point_along(path, s);
+            if self.hot_near_c(at) >= t_max {
                 result.segment_overheats += 1;
+                self.overheat_points.push(at);
             }
             s += seg;
         }
@@ -335,21 +364,47 @@ impl<'a> ThermalSim<'a> {
         self.spread_steps(dwell);
         // Cut: one cell per step along the path.
         let step_mm = self.params.cell_mm;
-        for w in path.windows(2) {
-            let len = distance(w[0], w[1]);
-            let n = (len / step_mm).ceil() as usize;
-            for k in 1..=n {
-                let f = k as f64 / n as f64;
-                let p = [
-                    w[0][0] + f * (w[1][0] - w[0][0]),
-                    w[0][1] + f * (w[1][1] - w[0][1]),
-                ];
-                let (x, y) = self.cell(p);
+        if by_length {
+            // Steps at every `step_mm` of path length, and one at its end.
+            let mut next = step_mm;
+            let mut at = 0.0;
+            for w in path.windows(2) {
+                let len = distance(w[0], w[1]);
+                while next <= at + len && len > 0.0 {
+                    let f = (next - at) / len;
+                    let p = [
+                        w[0][0] + f * (w[1][0] - w[0][0]),
+                        w[0][1] + f * (w[1][1] - w[0][1]),
+                    ];
+                    let (x, y) = self.cell(p);
+                    self.melt(x, y);
+                    self.spread();
+                    next += step_mm;
+                }
+                at += len;
+            }
+            if next - step_mm < at {
+                let (x, y) = self.cell(path[path.len() - 1]);
                 self.melt(x, y);
                 self.spread();
             }
+        } else {
+            for w in path.windows(2) {
+                let len = distance(w[0], w[1]);
+                let n = (len / step_mm).ceil() as usize;
+                for k in 1..=n {
+                    let f = k as f64 / n as f64;
+                    let p = [
+                        w[0][0] + f * (w[1][0] - w[0][0]),
+                        w[0][1] + f * (w[1][1] - w[0][1]),
+                    ];
+                    let (x, y) = self.cell(p);
+                    self.melt(x, y);
+                    self.spread();
+                }
+            }
         }
-        self.tool = pierce;
+        self.tool = path[path.len() - 1];
         self.per_cut.push(result);
         result
     }
@@ -371,6 +426,7 @@ impl<'a> ThermalSim<'a> {
             steps: self.step,
             cells_updated: self.cells_updated,
             per_cut: std::mem::take(&mut self.per_cut),
+            overheat_points: std::mem::take(&mut self.overheat_points),
         }
     }
 }

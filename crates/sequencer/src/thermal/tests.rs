@@ -8,6 +8,8 @@ fn square(x: f64, y: f64, s: f64) -> Contour {
         role: ContourRole::Outer,
         points: vec![[x, y], [x + s, y], [x + s, y + s], [x, y + s]],
         pierce_candidates: vec![[x, y]],
+        leads: Vec::new(),
+        drawn: Vec::new(),
     }
 }
 
