@@ -1,34 +1,36 @@
-//! Sequencing bench (seed 003 §A5 metrics, issue 7 targets): per instance and policy, idle
-//! length, cut length, overheats, maximum temperature, runtime and, thermal cost off, the gap
-//! of our idle length to LKH-3 (PyPI `elkai` via `benches/lkh_peer.py`, when installed) on the
-//! same pierce points.
+//! Sequencing bench (seed 003 §A5 metrics, issue 7 and issue 19 targets): per instance and
+//! policy, idle length, cut length, overheats, maximum temperature, runtime, peak memory and,
+//! thermal cost off, the gap of our idle length to LKH-3 (PyPI `elkai` via
+//! `benches/lkh_peer.py`, when installed) on the same pierce points.
 //!
 //! Instances: the seeded generator ([`cell_sequencer::generator`], seed 7) at each size, strict
 //! precedence, free pierce candidates; then the real part outlines of
 //! `tests/data/sheet/plate_holes_nest.json`; then the dense perforated layouts
-//! ([`cell_sequencer::generator::generate_perforated`], seed 1; issue 19: 5000 contours on
-//! 4000 × 2000 mm).
+//! ([`cell_sequencer::generator::generate_perforated`], seed 1 or `DENSE_SEED`; issue 19:
+//! 5000 contours on 4000 × 2000 mm).
 //!
 //! `cargo bench -p cell_sequencer --bench sequencing [-- SIZES...]` (sizes in contours, default
 //! 50 500 1000 5000 plus the plate nest and `dense5000`; `plate` alone runs only the plate
 //! nest, `denseN` a dense layout of N contours, `dense` = `dense5000`). Every row gives the
 //! peak resident memory while it ran (`peak_mb`: Linux `VmHWM`, reset before each row through
-//! `/proc/self/clear_refs`). `BENCH_THERMAL=on|off` runs one side only; `BENCH_POLICIES=0`
-//! skips the
-//! paper's policies other than nearest (quicker tuning runs); `K_LOSS`, `T_MAX_C`, `CELL_MM`
-//! and `K_C` override the thermal defaults (`LKH_MAX`: the most points handed to LKH-3,
-//! default 2000; `LKH_RUNS`: its runs, default 10), `PROXY_WEIGHT`, `PROXY_RADIUS` and `IDLE_BUDGET`
-//! the improvement's (also `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS`,
-//! `MAX_ITER`).
+//! `/proc/self/clear_refs`).
 //!
-//! Rows: `nearest` … `cost_greedy` are the constructions alone; `nearest+imp` and `path+imp`
-//! are that construction then the improvement with its default parameters (idle budget 1.5×
-//! nearest), runtime including the construction, the improvement and the final true
-//! simulation (`nearest+imp`: the start's raster run goes alongside the search,
-//! [`cell_sequencer::improve::Start::Cuts`]). Thermal off: `nearest` and `nearest+imp`, with the gap to LKH-3 on the pierce
-//! points chosen (LKH-3 ignores precedence, so part of the gap is the rules' price); last,
-//! `scatter` rows: the
-//! pure TSP (scattered points, one pierce point each, no precedence) against LKH-3.
+//! Environment: `BENCH_THERMAL=on|off` runs one side only; `BENCH_POLICIES=0` skips the
+//! paper's policies other than nearest (quicker tuning runs); `BENCH_STARTS` (comma-separated
+//! `nearest`, `path`, `greedy`) picks the improvement rows; `K_LOSS`, `T_MAX_C`, `CELL_MM` and
+//! `K_C` override the thermal defaults; `PROXY_WEIGHT`, `PROXY_RADIUS`, `IDLE_BUDGET`,
+//! `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS` and `MAX_ITER` the improvement's;
+//! `LKH_PYTHON` the peer's interpreter, `LKH_MAX` the most points handed to it (default 2000),
+//! `LKH_RUNS` its runs (default 10).
+//!
+//! Rows: `nearest` … `cost_greedy` are the constructions alone; `nearest+imp`, `path+imp` and
+//! `greedy+imp` are that construction then the improvement with its default parameters (idle
+//! budget 1.5× nearest), runtime including the construction, the improvement and the final
+//! true simulation (`nearest+imp`: the start's raster run goes alongside the search,
+//! [`cell_sequencer::improve::Start::Cuts`]). Thermal off (`cell sheet --thermal off`):
+//! `nearest` and `nearest+imp`, with the gap to LKH-3 on the pierce points chosen (LKH-3
+//! ignores precedence, so part of the gap is the rules' price); last, `scatter` rows: the pure
+//! TSP (scattered points, one pierce point each, no precedence) against LKH-3.
 
 use std::path::Path;
 use std::time::Instant;

@@ -678,7 +678,7 @@ impl LeadFinder<'_> {
     /// The leads of one contour (module docs): a small hole's centre pierce if it fits, else a
     /// clear lead at each of the `entries` (points near the cut path, e.g. the corner-avoiding
     /// pierce candidates of the drawn contour) that takes one, else at the first of
-    /// [`FALLBACK_ENTRIES`] even entries round the contour that does. `nominal` is the drawn
+    /// `FALLBACK_ENTRIES` even entries round the contour that does. `nominal` is the drawn
     /// ring.
     ///
     /// # Errors
