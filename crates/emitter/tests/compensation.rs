@@ -221,34 +221,6 @@ fn a_contour_with_no_move_long_enough_to_enter_on_is_named() {
 
 // ---- LinuxCNC's interpreter -------------------------------------------------------------
 
-/// Runs the standalone `rs274` with `table` through `tests/interp/rs274.py --moves-only`:
-/// (exit code, canonical calls, stderr).
-fn rs274(text: &str, table: &str) -> (i32, String, String) {
-    let dir = tempfile::tempdir().unwrap();
-    let (file, tbl) = (dir.path().join("program.ngc"), dir.path().join("tool.tbl"));
-    std::fs::write(&file, text).unwrap();
-    std::fs::write(&tbl, table).unwrap();
-    let script =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/interp/rs274.py");
-    let out = std::process::Command::new("python3")
-        .arg(script)
-        .args(["--moves-only", "--tool-table"])
-        .arg(&tbl)
-        .arg(&file)
-        .output()
-        .expect("python3 runs");
-    let code = out.status.code().unwrap_or(-1);
-    assert_ne!(
-        code, 3,
-        "rs274 is missing: run `bash tests/interp/install.sh`"
-    );
-    (
-        code,
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 /// The tool table as the standalone `rs274` reads it: its canon is an inch machine
 /// (`GET_EXTERNAL_LENGTH_UNITS` 1/25.4 in LinuxCNC's `saicanon.cc`), so tool diameters are
 /// inches there, where a metric LinuxCNC reads the same file in mm.
@@ -421,7 +393,7 @@ fn linuxcnc_offsets_the_torch_half_a_kerf_to_the_scrap_side() {
         ("clockwise", mirrored(&common::sheet_part_with_leads())),
     ] {
         let (text, table) = emit(&tp, &profile, &EmitOptions::default());
-        let (code, calls, err) = rs274(&text, &for_standalone_rs274(&table));
+        let (code, calls, err) = common::rs274(&text, Some(&for_standalone_rs274(&table)));
         assert_eq!(code, 0, "{what}: {err}\n{text}");
         assert_eq!(calls.matches("CHANGE_TOOL(1)").count(), 1, "{what}");
         check_offset(&tp, &calls, 0.75, tolerance(&profile), &[true, false]);
@@ -433,14 +405,14 @@ fn linuxcnc_offsets_the_torch_half_a_kerf_to_the_scrap_side() {
         .replace("G41 ", "G4X ")
         .replace("G42 ", "G41 ")
         .replace("G4X ", "G42 ");
-    let (code, calls, _) = rs274(&swapped, &for_standalone_rs274(&table));
+    let (code, calls, _) = common::rs274(&swapped, Some(&for_standalone_rs274(&table)));
     if code == 0 {
         let caught =
             std::panic::catch_unwind(|| check_offset(&tp, &calls, 0.75, 0.022, &[true, false]));
         assert!(caught.is_err(), "swapped sides went unnoticed");
     }
     // And so is the tool table: with the kerf read as 1.5 inches the entry moves are refused.
-    let (code, _, err) = rs274(&text, &table);
+    let (code, _, err) = common::rs274(&text, Some(&table));
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("cutter compensation"), "{err}");
 }
@@ -465,7 +437,7 @@ fn every_shipped_linuxcnc_sheet_profile_runs_with_controller_compensation() {
             .unwrap()
             .parse()
             .unwrap();
-        let (code, calls, err) = rs274(&text, &for_standalone_rs274(&table));
+        let (code, calls, err) = common::rs274(&text, Some(&for_standalone_rs274(&table)));
         assert_eq!(code, 0, "{name}: {err}");
         check_offset(&tp, &calls, kerf / 2.0, tolerance(&profile), &[true, false]);
     }

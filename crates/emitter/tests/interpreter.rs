@@ -484,31 +484,6 @@ fn the_trace_check_catches_a_point_the_program_misses() {
     assert!(caught.is_err(), "a 2 % feed difference went unnoticed");
 }
 
-/// Runs the standalone `rs274` (X Y Z A B C only) through `tests/interp/rs274.py --moves-only`:
-/// (exit code, canonical calls, stderr).
-fn rs274(text: &str) -> (i32, String, String) {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("program.ngc");
-    std::fs::write(&file, text).unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/interp/rs274.py");
-    let out = std::process::Command::new("python3")
-        .arg(script)
-        .arg("--moves-only")
-        .arg(&file)
-        .output()
-        .expect("python3 runs");
-    let code = out.status.code().unwrap_or(-1);
-    assert_ne!(
-        code, 3,
-        "rs274 is missing: run `bash tests/interp/install.sh`"
-    );
-    (
-        code,
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 #[test]
 fn xyzabc_programs_pass_the_standalone_rs274_too() {
     if !cell_testkit::linuxcnc_interpreter_here() {
@@ -531,7 +506,7 @@ fn xyzabc_programs_pass_the_standalone_rs274_too() {
         if g.dialect == cell_profiles::Dialect::Marlin {
             text = marlin_for_linuxcnc(&text);
         }
-        let (code, calls, err) = rs274(&text);
+        let (code, calls, err) = common::rs274(&text, None);
         assert_eq!(code, 0, "{name}: {err}");
         // As many feed moves and arcs as the program has G1/G2/G3 lines that move an axis.
         let feeds = calls
@@ -549,7 +524,7 @@ fn xyzabc_programs_pass_the_standalone_rs274_too() {
     let text = gcode::emit(&common::sheet_part(), &profile, "plate").unwrap();
     let broken = text.replacen(" I0.000 J8.000", " I0.000 J9.000", 1);
     assert_ne!(broken, text);
-    let (code, _, err) = rs274(&broken);
+    let (code, _, err) = common::rs274(&broken, None);
     assert_eq!(code, 1, "{err}");
     assert!(
         err.contains("Radius to end of arc differs from radius to start"),

@@ -299,3 +299,32 @@ pub fn dialect_samples() -> Vec<(&'static str, Toolpath)> {
         ("marlin-extruder", printed_layers()),
     ]
 }
+
+/// Runs the standalone `rs274` (X Y Z A B C only) through `tests/interp/rs274.py
+/// --moves-only` on `text`, with `tool_table` (LinuxCNC's format) when given: (exit code,
+/// canonical calls, stderr).
+pub fn rs274(text: &str, tool_table: Option<&str>) -> (i32, String, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("program.ngc");
+    std::fs::write(&file, text).unwrap();
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/interp/rs274.py");
+    let mut command = std::process::Command::new("python3");
+    command.arg(script).arg("--moves-only");
+    if let Some(table) = tool_table {
+        let tbl = dir.path().join("tool.tbl");
+        std::fs::write(&tbl, table).unwrap();
+        command.arg("--tool-table").arg(tbl);
+    }
+    let out = command.arg(&file).output().expect("python3 runs");
+    let code = out.status.code().unwrap_or(-1);
+    assert_ne!(
+        code, 3,
+        "rs274 is missing: run `bash tests/interp/install.sh`"
+    );
+    (
+        code,
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
