@@ -248,6 +248,10 @@ pub fn run(a: SheetArgs) -> ExitCode {
         Ok(o) => o,
         Err(e) => return bad_data(e),
     };
+    // What is not cut as drawn (holes left out, features narrower than the kerf).
+    for w in out.cut.iter().flat_map(|c| &c.warnings) {
+        eprintln!("cell sheet: warning: {}: {w}", a.layout.display());
+    }
     let job_id = cell_emitter::file_stem(
         &a.layout
             .file_stem()

@@ -446,3 +446,35 @@ fn a_json_layout_is_placed_at_its_origin_and_small_dxf_is_unchanged() {
     assert!(small.ok, "{}", small.stderr);
     assert_sheet(&small.report(), "sheet_layer", [300.0, 200.0], [0.0, 0.0]);
 }
+
+#[test]
+fn a_notch_narrower_than_the_kerf_is_named_on_stderr_and_in_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let layout = dir.path().join("comb.json");
+    // A plate with a 1 mm slot 30 mm deep in its top edge: a 1.5 mm plasma kerf cannot enter.
+    std::fs::write(
+        &layout,
+        r#"{"sheet": [300, 200], "start": [0, 0], "parts": [{"name": "comb", "outer": {"points":
+            [[10,10],[110,10],[110,110],[60.5,110],[60.5,80],[59.5,80],[59.5,110],[10,110]]}}]}"#,
+    )
+    .unwrap();
+    let profile =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("config/machines/linuxcnc-plasma-3015.yaml");
+    let run = cell_sheet(&layout, &["--profile", profile.to_str().unwrap()]);
+    assert!(run.ok, "{}", run.stderr);
+    assert!(
+        run.stderr.contains("warning: ")
+            && run
+                .stderr
+                .contains("comb.json: parts[0] (comb).outer: the kerf misses")
+            && run.stderr.contains("narrower than the 1.5 mm kerf"),
+        "{}",
+        run.stderr
+    );
+    let report = run.report();
+    let warnings = report["cut"]["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].as_str().unwrap().contains("(comb)"));
+    // The part is still cut, round the slot.
+    assert_eq!(report["contours"], 1);
+}

@@ -15,11 +15,15 @@
 //! peak resident memory while it ran (`peak_mb`: Linux `VmHWM`, reset before each row through
 //! `/proc/self/clear_refs`).
 //!
+//! Every instance is cut as `cell sheet` cuts it (issue 19): the default material of a profile
+//! (`BENCH_PROFILE`, else per instance), kerf offset and leads; `BENCH_CUT=0`: the drawn
+//! contours pierced on the contour.
+//!
 //! Environment: `BENCH_THERMAL=on|off` runs one side only; `BENCH_POLICIES=0` skips the
 //! paper's policies other than nearest (quicker tuning runs); `BENCH_STARTS` (comma-separated
 //! `nearest`, `path`, `greedy`) picks the improvement rows; `K_LOSS`, `T_MAX_C`, `CELL_MM` and
 //! `K_C` override the thermal defaults; `PROXY_WEIGHT`, `PROXY_RADIUS`, `IDLE_BUDGET`,
-//! `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS` and `MAX_ITER` the improvement's;
+//! `PROXY_HALF_LIFE`, `PROXY_LOOKBACK`, `TIME_BUDGET_MS`, `MAX_ITER` and `IMPROVE_SEED` the improvement's;
 //! `LKH_PYTHON` the peer's interpreter, `LKH_MAX` the most points handed to it (default 2000),
 //! `LKH_RUNS` its runs (default 10).
 //!
@@ -35,7 +39,9 @@
 use std::path::Path;
 use std::time::Instant;
 
+use cell_profiles::MachineProfile;
 use cell_sequencer::cost::{CostParams, Evaluator};
+use cell_sequencer::cut::{cut_problem, spec_for_profile};
 use cell_sequencer::fixtures::scattered;
 use cell_sequencer::generator::{generate, generate_perforated, GeneratorConfig, PerforatedConfig};
 use cell_sequencer::improve::{improve, ImproveOptions, ImproveParams, Improved, Start};
@@ -89,14 +95,17 @@ fn main() {
                 contours: n,
                 ..Default::default()
             });
-            (format!("gen{n}"), problem_of(&layout))
+            (
+                format!("gen{n}"),
+                problem_of(&layout, "linuxcnc-plasma-3015"),
+            )
         })
         .collect();
     if plate_only || defaults || args.iter().any(|a| a == "+plate") {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../tests/data/sheet/plate_holes_nest.json");
         let layout = Layout::from_json_file(&path).expect("plate nest");
-        instances.push(("plate".into(), problem_of(&layout)));
+        instances.push(("plate".into(), problem_of(&layout, "linuxcnc-plasma")));
     }
     for &n in &dense {
         let layout = generate_perforated(&PerforatedConfig {
@@ -104,7 +113,10 @@ fn main() {
             contours: n,
             ..Default::default()
         });
-        instances.push((format!("dense{n}"), problem_of(&layout)));
+        instances.push((
+            format!("dense{n}"),
+            problem_of(&layout, "linuxcnc-plasma-4020"),
+        ));
     }
     for (name, problem) in &instances {
         run_instance(name, problem);
@@ -130,10 +142,38 @@ fn main() {
     }
 }
 
-fn problem_of(layout: &Layout) -> Problem {
-    layout
-        .to_problem(PrecedenceMode::Strict, &PierceOptions::default())
-        .expect("valid layout")
+/// The problem of `layout` as `cell sheet` cuts it on `profile` (`config/machines/`, or
+/// `BENCH_PROFILE`): its default material's kerf offset and leads, the pierce candidates the
+/// lead-ins' starts ([`cell_sequencer::cut`]). `BENCH_CUT=0`: the drawn contours, pierced on
+/// the contour (the figures before issue 19).
+fn problem_of(layout: &Layout, profile: &str) -> Problem {
+    let pierce = PierceOptions::default();
+    if env("BENCH_CUT") == Some(0.0) {
+        return layout
+            .to_problem(PrecedenceMode::Strict, &pierce)
+            .expect("valid layout");
+    }
+    let name = std::env::var("BENCH_PROFILE").unwrap_or_else(|_| profile.to_string());
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../config/machines")
+        .join(format!("{name}.yaml"));
+    let profile = MachineProfile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let (spec, material) = spec_for_profile(&profile, None, None)
+        .and_then(|s| s.ok_or_else(|| format!("{name} has no cutting: section")))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (problem, _) = cut_problem(layout, PrecedenceMode::Strict, &pierce, &spec)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    println!(
+        "# {} contours cut on {name}: {} {} mm, kerf {} mm, {:?} lead-in {} mm, lead-out {} mm",
+        problem.contours.len(),
+        material.material,
+        material.thickness_mm,
+        spec.kerf_mm,
+        spec.lead_shape,
+        spec.lead_in_mm,
+        spec.lead_out_mm
+    );
+    problem
 }
 
 /// The improvement with [`improve_params`] and no hooks.
@@ -154,6 +194,7 @@ fn improve_params() -> ImproveParams {
         proxy_lookback: env("PROXY_LOOKBACK").map_or(d.proxy_lookback, |v| v as usize),
         time_budget_ms: env("TIME_BUDGET_MS").map_or(d.time_budget_ms, |v| v as u64),
         max_iterations: env("MAX_ITER").map_or(d.max_iterations, |v| v as usize),
+        seed: env("IMPROVE_SEED").map_or(d.seed, |v| v as u64),
         ..d
     }
 }
@@ -229,6 +270,9 @@ fn run_instance(name: &str, problem: &Problem) {
             let label = format!("{}+imp", start_name(policy));
             let label = label.as_str();
             row(name, n, thermal, label, &better, ms, gap);
+            if !thermal {
+                no_rules_row(name, problem);
+            }
             if thermal {
                 println!(
                     "{:>9}   {label} vs nearest: overheats {:+.1} %, idle ×{:.2}",
@@ -239,6 +283,30 @@ fn run_instance(name: &str, problem: &Problem) {
             }
         }
     }
+}
+
+/// Thermal cost off, the same cuts without the precedence rules: nearest + improvement against
+/// LKH-3 on a problem both see alike, our search's own gap (the `nearest+imp` row's gap less
+/// this one is about the rules' price).
+fn no_rules_row(name: &str, problem: &Problem) {
+    let mut free = problem.clone();
+    let n = free.contours.len();
+    free.precedence.predecessors = vec![Vec::new(); n];
+    free.precedence.groups.clear();
+    let cost = CostParams {
+        thermal: false,
+        ..Default::default()
+    };
+    let eval = Evaluator::new(&free, thermal_params(), cost).unwrap();
+    reset_peak();
+    let t0 = Instant::now();
+    let cuts = construct_cuts(&eval, Policy::Nearest, 1).unwrap();
+    let better = improve(&eval, Start::Cuts(&cuts), improve_options())
+        .unwrap()
+        .best;
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    let gap = lkh_length(&free, &better).map(|l| 100.0 * (better.idle_mm / l - 1.0));
+    row(name, n, false, "no rules+imp", &better, ms, gap);
 }
 
 /// The short name of an improvement start in the rows and `BENCH_STARTS`.
@@ -281,7 +349,8 @@ fn thermal_params() -> ThermalParams {
     p
 }
 
-/// LKH-3's closed-tour length over the start and the pierce points `plan` chose (no
+/// LKH-3's closed-tour length over the start and the cuts `plan` chose, each entered at its
+/// pierce point and left at its exit (the end of its lead-out; an asymmetric TSP then; no
 /// precedence: a lower bound on what any precedence-respecting order of them can reach), if
 /// `python3` with `elkai` is available (`pip install -r crates/sequencer/benches/requirements.txt`;
 /// `LKH_PYTHON` names another interpreter, e.g. a venv's).
@@ -308,8 +377,8 @@ fn lkh_length(problem: &Problem, plan: &CutPlan) -> Option<f64> {
         let mut stdin = child.stdin.take()?;
         let mut text = format!("{} {}\n", problem.start[0], problem.start[1]);
         for c in &plan.cuts {
-            let p = c.point(problem);
-            text.push_str(&format!("{} {}\n", p[0], p[1]));
+            let (p, e) = (c.point(problem), c.exit(problem));
+            text.push_str(&format!("{} {} {} {}\n", p[0], p[1], e[0], e[1]));
         }
         stdin.write_all(text.as_bytes()).ok()?;
     }

@@ -26,7 +26,7 @@ use cell_profiles::{
 use serde::Serialize;
 
 use crate::containment::{dedup_ring, find_crossing};
-use crate::kerf::{offset_contour, orient_part_right, OffsetFailure};
+use crate::kerf::{offset_contour, orient_part_right, uncut_stretch, OffsetFailure};
 use crate::layout::{free_pierce_candidates, Layout, LayoutError, PierceOptions};
 use crate::leads::{LeadFinder, LeadParams, LeadTarget, Obstacles};
 use crate::precedence::PrecedenceMode;
@@ -203,7 +203,8 @@ pub struct CutSummary {
     pub short_lead_ins: usize,
     /// The least distance of a pierce candidate (centre pierces aside) from its cut path, mm.
     pub nearest_pierce_mm: f64,
-    /// Holes left out, each naming the hole and why (`too_small_holes: skip`).
+    /// What is not cut as drawn, each naming the contour: holes left out
+    /// (`too_small_holes: skip`), notches and inside corners narrower than the kerf.
     pub warnings: Vec<String>,
 }
 
@@ -344,6 +345,21 @@ pub fn cut_problem(
             }
         }
     }
+    // Notches and inside corners the kerf cannot reach: cut as the offset allows, said aloud.
+    let mut narrow = Vec::new();
+    for (r, ring) in rings.iter().enumerate().filter(|&(r, _)| !skipped[r]) {
+        if let Some(miss) = uncut_stretch(&ring.nominal, &offsets[r], half) {
+            narrow.push(format!(
+                "{}: the kerf misses {:.1} mm of the drawn outline around ({:.3}, {:.3}): a \
+                 notch or inside corner there is narrower than the {} mm kerf and stays uncut",
+                name(ring),
+                miss.length_mm,
+                miss.at[0],
+                miss.at[1],
+                spec.kerf_mm
+            ));
+        }
+    }
     let kept: Vec<usize> = (0..rings.len()).filter(|&r| !skipped[r]).collect();
     let kept_offsets: Vec<Vec<Point>> = kept.iter().map(|&r| offsets[r].clone()).collect();
     if let Some((a, b)) = find_crossing(&kept_offsets) {
@@ -448,6 +464,7 @@ pub fn cut_problem(
         contour.pierce_candidates = ls.iter().map(|l| l.pierce()).collect();
         contour.leads = ls;
     }
+    warnings.extend(narrow);
     let summary = CutSummary {
         kerf_mm: spec.kerf_mm,
         compensation: spec.compensation,

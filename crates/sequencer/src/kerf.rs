@@ -17,11 +17,11 @@
 //! **Failures.** A hole whose inward offset vanishes (smaller than the kerf) or falls apart
 //! into several loops (a neck narrower than the kerf) cannot be cut as drawn:
 //! [`OffsetFailure`]; so can an outward offset that comes back as several loops. A notch of a
-//! part narrower than the kerf is bridged by the offset (the tool cannot enter it), which no
-//! check here reports.
+//! part narrower than the kerf is bridged by the offset (the tool cannot enter it):
+//! [`uncut_stretch`] finds the drawing the kerf misses.
 
 use cavalier_contours::polyline::{PlineSource, PlineSourceMut, Polyline};
-use cell_geometry::signed_area_from_first_vertex;
+use cell_geometry::{distance_to_rings, signed_area_from_first_vertex, Norm};
 
 use crate::containment::{dedup_ring, to_pline};
 use crate::problem::{ContourRole, Point};
@@ -102,6 +102,76 @@ pub fn offset_contour(
         }
         n => Err(OffsetFailure::Splits(n)),
     }
+}
+
+/// A stretch of the drawing the kerf does not reach ([`uncut_stretch`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UncutStretch {
+    /// Its middle, along the drawing.
+    pub at: Point,
+    /// Its length along the drawn contour, mm (to within the sampling step, half a kerf).
+    pub length_mm: f64,
+}
+
+/// The longest stretch of `nominal` the kerf along `path` misses, if it is longer than two
+/// kerfs: a notch narrower than the kerf, which the offset bridges (the stretch is the notch's
+/// two walls and bottom), or a concave corner much sharper than a right angle.
+///
+/// The kerf (half width `h` = `half_kerf_mm` either side of `path`) reaches a drawn point iff
+/// the point lies within `h` of the path (plus the chords' tolerance). Straight edges and
+/// convex corners are reached everywhere; a concave corner of angle `θ` is missed for
+/// `h · cot(θ/2)` along each wall (the kerf's round, `2h` in all at 90°, not reported). The
+/// drawing is sampled every `h / 2`.
+pub fn uncut_stretch(nominal: &[Point], path: &[Point], half_kerf_mm: f64) -> Option<UncutStretch> {
+    let h = half_kerf_mm;
+    if h <= 0.0 || path.len() < 3 || nominal.len() < 3 {
+        return None;
+    }
+    let step = h / 2.0;
+    let reach = h * 1.05 + CHORD_TOL_MM;
+    // (point, distance to the path, length of drawing it stands for)
+    let mut samples: Vec<(Point, f64, f64)> = Vec::new();
+    for i in 0..nominal.len() {
+        let (a, b) = (nominal[i], nominal[(i + 1) % nominal.len()]);
+        let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let k = (len / step).ceil().max(1.0) as usize;
+        for j in 0..k {
+            let t = j as f64 / k as f64;
+            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            samples.push((
+                p,
+                distance_to_rings(p, &[path], Norm::Hypot),
+                len / k as f64,
+            ));
+        }
+    }
+    let missed = |i: usize| samples[i].1 > reach;
+    // Start the circular scan just after a reached sample, so no run wraps round.
+    let first = (0..samples.len()).find(|&i| !missed(i))?;
+    let mut best: Option<UncutStretch> = None;
+    let mut run: Vec<(Point, f64)> = Vec::new();
+    for step in 1..=samples.len() {
+        let i = (first + step) % samples.len();
+        if missed(i) {
+            run.push((samples[i].0, samples[i].2));
+            continue;
+        }
+        let length_mm: f64 = run.iter().map(|r| r.1).sum();
+        if !run.is_empty() && best.is_none_or(|b| length_mm > b.length_mm) {
+            // The run's middle along the drawing.
+            let mut walked = 0.0;
+            let at = run
+                .iter()
+                .find(|r| {
+                    walked += r.1;
+                    walked >= length_mm / 2.0
+                })
+                .map_or(run[0].0, |r| r.0);
+            best = Some(UncutStretch { at, length_mm });
+        }
+        run.clear();
+    }
+    best.filter(|b| b.length_mm > 4.0 * h)
 }
 
 #[cfg(test)]
@@ -191,6 +261,8 @@ mod tests {
         for role in [ContourRole::Outer, ContourRole::Hole] {
             let p = offset_contour(&l, role, 1.5).unwrap();
             assert_offset(&l, &p, role, 1.5);
+            // A 90° inside corner keeps the kerf's round: not reported.
+            assert_eq!(uncut_stretch(&l, &p, 1.5), None, "{role:?}");
         }
     }
 
@@ -241,6 +313,31 @@ mod tests {
         assert!(
             !p.iter().any(|q| q[0] > 4.0 && q[0] < 6.0 && q[1] < 10.5),
             "{p:?}"
+        );
+        // ... and reported: both walls and the bottom (8 + 1 + 8 mm, less the corners'
+        // rounds the kerf reaches), its middle at the bottom.
+        let miss = uncut_stretch(&notched, &p, 0.75).expect("the bridged notch");
+        assert!((miss.at[1] - 2.0).abs() < 0.5, "{miss:?}");
+        assert!((miss.length_mm - 17.0).abs() < 1.5, "{miss:?}");
+        // A 2 mm notch, wider than the kerf, is cut: nothing to report.
+        let wide = vec![
+            [0.0, 0.0],
+            [10.0, 0.0],
+            [10.0, 10.0],
+            [6.0, 10.0],
+            [6.0, 2.0],
+            [4.0, 2.0],
+            [4.0, 10.0],
+            [0.0, 10.0],
+        ];
+        let p = offset_contour(&wide, ContourRole::Outer, 0.75).unwrap();
+        assert_eq!(uncut_stretch(&wide, &p, 0.75), None);
+        // The same 1 mm slot in a hole's edge (the hole's offset bridges it too).
+        let p = offset_contour(&notched, ContourRole::Hole, 0.75).unwrap();
+        assert_eq!(
+            uncut_stretch(&notched, &p, 0.75),
+            None,
+            "a tab into a hole is cut round"
         );
         // No kerf: the ring, turned part-right.
         assert_eq!(

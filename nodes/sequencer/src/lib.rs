@@ -421,15 +421,15 @@ impl GoalHandler for Sequencer {
             out.seconds,
             out.sheet
         );
-        // The kerf and leads it was cut with, and the holes it left out.
+        // The kerf and leads it was cut with, and what it could not cut as drawn.
         let message = match &out.cut {
             Some(c) => {
                 for w in &c.warnings {
                     tracing::warn!("sequence_sheet: {job_id}: {w}");
                 }
                 format!(
-                    "{message}; kerf {} mm ({:?}), lead-in {} mm, lead-out {} mm, {} holes \
-                     left out",
+                    "{message}; kerf {} mm ({:?}), lead-in {} mm, lead-out {} mm, {} warnings \
+                     (holes left out, features narrower than the kerf)",
                     c.kerf_mm,
                     c.compensation,
                     c.lead_in_mm,

@@ -167,6 +167,81 @@ fn holes_too_small_for_the_kerf_fail_or_are_skipped_by_name() {
 }
 
 #[test]
+fn a_notch_narrower_than_the_kerf_is_cut_round_with_a_warning_naming_it() {
+    // A 100 mm plate with a 1 mm slot 30 mm deep in its top edge (at x = 60) and a 3 mm one
+    // (x = 30), and a hole with a 1 mm slot 20 mm deep from its right side.
+    let outer = vec![
+        [10.0, 10.0],
+        [110.0, 10.0],
+        [110.0, 110.0],
+        [60.5, 110.0],
+        [60.5, 80.0],
+        [59.5, 80.0],
+        [59.5, 110.0],
+        [31.5, 110.0],
+        [31.5, 80.0],
+        [28.5, 80.0],
+        [28.5, 110.0],
+        [10.0, 110.0],
+    ];
+    let hole = vec![
+        [30.0, 30.0],
+        [50.0, 30.0],
+        [50.0, 39.5],
+        [70.0, 39.5],
+        [70.0, 40.5],
+        [50.0, 40.5],
+        [50.0, 50.0],
+        [30.0, 50.0],
+    ];
+    let l = layout(
+        [200.0, 200.0],
+        vec![part(
+            "comb",
+            Ring {
+                points: outer,
+                pierce: None,
+            },
+            vec![Ring {
+                points: hole,
+                pierce: None,
+            }],
+        )],
+    );
+    let (p, summary) = cut(&l, &plasma()).unwrap();
+    assert_eq!(p.contours.len(), 2, "both are still cut");
+    assert_eq!(summary.warnings.len(), 2, "{:?}", summary.warnings);
+    let outer_w = summary
+        .warnings
+        .iter()
+        .find(|w| w.starts_with("parts[0] (comb).outer: "))
+        .expect("the outline's warning");
+    // The 1 mm slot, around its bottom; the 3 mm one is cut.
+    assert!(
+        distance(warned_at(outer_w), [60.0, 80.0]) < 1.0,
+        "{outer_w}"
+    );
+    assert!(
+        outer_w.contains("narrower than the 1.5 mm kerf"),
+        "{outer_w}"
+    );
+    let hole_w = summary
+        .warnings
+        .iter()
+        .find(|w| w.starts_with("parts[0] (comb).holes[0]: "))
+        .expect("the hole's warning");
+    assert!(distance(warned_at(hole_w), [70.0, 40.0]) < 1.0, "{hole_w}");
+}
+
+/// The point a warning names: "… around (x, y) …".
+fn warned_at(w: &str) -> Point {
+    let (_, rest) = w.split_once("around (").expect("a point");
+    let (xy, _) = rest.split_once(')').unwrap();
+    let (x, y) = xy.split_once(", ").unwrap();
+    [x.parse().unwrap(), y.parse().unwrap()]
+}
+
+#[test]
 fn parts_nested_closer_than_the_kerf_are_an_error_naming_both() {
     let l = layout(
         [200.0, 100.0],

@@ -1,11 +1,14 @@
 //! The neighbour-list sweep (module docs, step 1, thermal cost off): 2-opt and Or-opt between
 //! each contour and its nearest contours at any distance along the sequence, with O(1) idle
 //! deltas and don't-look bits (Bentley's, as in LKH).
+//!
+//! An edge runs from a cut's exit (the end of its lead-out) to the next cut's pierce point, so
+//! with lead-outs the travel is asymmetric: reversing a run turns its inner edges too, and
+//! their change is added (O(run length), only for moves the outer edges already favour).
 
 use crate::plan::Cut;
 use crate::problem::ContourId;
 
-use super::distance::dist;
 use super::search::Search;
 
 impl Search<'_, '_> {
@@ -81,9 +84,12 @@ impl Search<'_, '_> {
                 if e2 - e1 < 2 {
                     continue;
                 }
-                let delta = dist(self.pt(e1), self.pt(e2)) + dist(self.pt(e1 + 1), self.pt(e2 + 1))
-                    - dist(self.pt(e1), self.pt(e1 + 1))
-                    - dist(self.pt(e2), self.pt(e2 + 1));
+                let mut delta = self.edge(e1, e2) + self.edge(e1 + 1, e2 + 1)
+                    - self.edge(e1, e1 + 1)
+                    - self.edge(e2, e2 + 1);
+                if delta < -eps && self.asymmetric {
+                    delta += self.reversal_inner_delta(e1 + 1, e2);
+                }
                 if delta < -eps
                     && self.commit_if_feasible(
                         (e1 + 1) as usize,
@@ -109,12 +115,15 @@ impl Search<'_, '_> {
                     continue;
                 }
                 let first = self.seq[i as usize].contour;
-                let (pf, pl) = (self.pt(i), self.pt(i + len - 1));
-                let (pp, pn) = (
-                    self.pt(i - 1),
-                    self.pt(if i + len == n { -1 } else { i + len }),
-                );
-                let gain = dist(pp, pf) + dist(pl, pn) - dist(pp, pn);
+                let gain = self.edge(i - 1, i) + self.edge(i + len - 1, i + len)
+                    - self.edge(i - 1, i + len);
+                // Reversing the run also turns its inner edges (exit to pierce: not the
+                // same length backwards once cuts have lead-outs).
+                let inner_rev = if self.asymmetric {
+                    self.reversal_inner_delta(i, i + len - 1)
+                } else {
+                    0.0
+                };
                 // The contour at a position (−1 and `n`: the start, as index `n`).
                 let contour_at = |s: &Self, p: isize| {
                     if p < 0 || p >= n {
@@ -133,9 +142,11 @@ impl Search<'_, '_> {
                         if q >= i - 1 && q < i + len {
                             continue;
                         }
-                        let (qa, qb) = (self.pt(q), self.pt(if q + 1 == n { -1 } else { q + 1 }));
-                        let fwd = dist(qa, pf) + dist(pl, qb) - dist(qa, qb);
-                        let rev = dist(qa, pl) + dist(pf, qb) - dist(qa, qb);
+                        let fwd =
+                            self.edge(q, i) + self.edge(i + len - 1, q + 1) - self.edge(q, q + 1);
+                        let rev = self.edge(q, i + len - 1) + self.edge(i, q + 1)
+                            - self.edge(q, q + 1)
+                            + inner_rev;
                         let (add, reversed) = if rev < fwd { (rev, true) } else { (fwd, false) };
                         if add - gain >= -eps {
                             continue;
@@ -202,5 +213,13 @@ impl Search<'_, '_> {
             Ok(())
         );
         improved
+    }
+
+    /// The change of the edges inside positions `lo..=hi` when the run is reversed: each
+    /// `exit(j) → pierce(j + 1)` becomes `exit(j + 1) → pierce(j)`. Zero without lead-outs.
+    fn reversal_inner_delta(&self, lo: isize, hi: isize) -> f64 {
+        (lo..hi)
+            .map(|j| self.edge(j + 1, j) - self.edge(j, j + 1))
+            .sum()
     }
 }

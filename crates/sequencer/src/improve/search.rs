@@ -43,6 +43,9 @@ pub(super) struct Search<'e, 'p> {
     pub(super) hot_mm: f64,
     /// Proxy charge of a pierce next to a hot kerf: one overheat plus the hot-pierce penalty.
     pub(super) pierce_w: f64,
+    /// Whether some cut leaves elsewhere than it is pierced (lead-outs): idle edges are then
+    /// not the same length backwards ([`Search::neighbour_sweep`]).
+    pub(super) asymmetric: bool,
     /// Current idle length, mm (kept up to date by the moves when `idle_cap` is finite).
     pub(super) idle: f64,
     /// Idle budget, mm (`ImproveParams::idle_budget`; infinite without one).
@@ -157,7 +160,14 @@ impl<'e, 'p> Search<'e, 'p> {
                 bits
             })
             .collect();
+        let asymmetric = problem.contours.iter().any(|c| {
+            c.pierce_candidates
+                .iter()
+                .enumerate()
+                .any(|(k, &p)| dist(c.exit(k), p) > 1e-12)
+        });
         let mut s = Search {
+            asymmetric,
             related,
             near,
             near_start,
