@@ -13,6 +13,9 @@
 //!   `program`);
 //! - `stock.stl`: the stock model, every deposited piece as a box (seed 004 §4.8);
 //! - with `--rows`, `rows.csv`: the thesis's toolpath rows `[X Y Z E C N LW/2 h k]`.
+//! - `slice.svg`: layer `--picture-layer` (default the middle one) in plan and a side section
+//!   through the part's centre, with the part, the beads and the machining allowance
+//!   ([`cell_slicer::picture`]).
 //!
 //! The part is put on the plate (bounding-box bottom at z = 0, centred on the machine's X/Y
 //! travel) unless `--as-is`. A progress bar counts the planned layers.
@@ -59,6 +62,10 @@ pub struct SliceArgs {
     /// Also write rows.csv, the thesis's toolpath rows.
     #[arg(long)]
     pub rows: bool,
+    /// Layer drawn in slice.svg (with a side section through the part's centre); default:
+    /// the middle layer.
+    #[arg(long, value_name = "N")]
+    pub picture_layer: Option<usize>,
 }
 
 /// `report.json`: the job's report and the program written.
@@ -144,7 +151,14 @@ pub fn run(a: SliceArgs) -> ExitCode {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "part".into())
     }));
-    let toolpath = cell_waam::to_msg::toolpath_msg(&out.layers, &job_id, FRAME_ID);
+    // The torch pose and tool point height of the process (issue 20 item 5).
+    let toolpath = cell_waam::to_msg::toolpath_msg_for(
+        &out.layers,
+        &slice_job.process.torch,
+        out.report.layer_height_mm,
+        &job_id,
+        FRAME_ID,
+    );
     let program = match cell_emitter::emit_program(&toolpath, &profile, &job_id) {
         Ok(p) => p,
         Err(e) => return bad_data(format!("{}: {e}", a.stl.display())),
@@ -183,6 +197,19 @@ pub fn run(a: SliceArgs) -> ExitCode {
             Ok(t) => files.push((name.into(), t)),
             Err(e) => return failure(format!("{name}: {e}")),
         }
+    }
+    // slice.svg: one layer and a side section with the part, beads and allowance (issue 20).
+    match cell_slicer::picture::slice_svg(
+        &out.stack,
+        &out.layers,
+        out.report.machining_allowance_mm,
+        a.picture_layer,
+    ) {
+        Ok(svg) => files.push(("slice.svg".into(), svg)),
+        Err(e @ cell_slicer::picture::PictureError::NoSuchLayer { .. }) => {
+            return usage(e.to_string())
+        }
+        Err(e) => eprintln!("warning: slice.svg not written: {e}"),
     }
     if a.rows {
         match String::from_utf8(out.rows_csv()) {

@@ -420,11 +420,13 @@ fn cell_emit_writes_every_file_of_a_rapid_program_under_its_name() {
     let wall = Toolpath {
         job_id: "wall".into(),
         process: Toolpath::PROCESS_WAAM,
-        power_unit: Toolpath::POWER_ARC_ON,
+        // The wire feed the program's welddata take (m/min).
+        power_unit: Toolpath::POWER_WIRE_FEED_M_MIN,
         segments: vec![ToolpathSegment {
             kind: ToolpathSegment::KIND_DEPOSIT,
             points: vec![p(100.0), p(150.0), p(200.0)],
             feed_mm_s: vec![8.0; 3],
+            power: vec![5.53; 3],
             ..Default::default()
         }],
         ..Default::default()

@@ -107,9 +107,10 @@ async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_b
     .await;
     assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
     assert!(result.success, "{}", result.message);
-    // Mid-layer planes 0.8 + 1.6 k below 20 mm: k = 0..=11.
+    // Issue 20: layers of 1.6 mm until the last bead's top is the 1 mm allowance above the
+    // 20 mm top: ⌈21/1.6⌉ = 14 (mid-layer planes 0.8 + 1.6 k).
     let layers = result.layer_stack.layers.len();
-    assert_eq!(layers, 12, "20 mm / 1.6 mm layers");
+    assert_eq!(layers, 14, "20 mm + 1 mm / 1.6 mm layers");
     assert!(!feedback.is_empty());
     assert!(
         feedback
@@ -136,9 +137,10 @@ async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_b
     assert!(!deposit_z.is_empty());
     assert!(deposit_z.windows(2).all(|w| w[0] <= w[1]), "{deposit_z:?}");
     assert!(deposit_z.first().unwrap() < deposit_z.last().unwrap());
-    // The stack and the deposits share z: the first plane 0.8 mm above the plate.
+    // The first slicing plane is mid-layer, 0.8 mm above the plate; the tool point (the wire
+    // tip) sits at the top of the bead being laid, 1.6 mm (issue 20, no CTWD by default).
     assert!((result.layer_stack.first_z_mm - 0.8).abs() < 1e-9);
-    assert!((deposit_z[0] - 0.8).abs() < 1e-9, "{}", deposit_z[0]);
+    assert!((deposit_z[0] - 1.6).abs() < 1e-9, "{}", deposit_z[0]);
 
     // The report agrees with the toolpath: V_d = Σ w·h·L over the deposit pieces (eq. 25).
     let report: serde_json::Value = serde_json::from_str(&result.report_json).unwrap();
@@ -308,11 +310,20 @@ fn cell_slice_writes_layers_program_report_and_stock() {
 
     let stack: LayerStack =
         serde_json::from_str(&std::fs::read_to_string(out.join("layers.json")).unwrap()).unwrap();
-    assert_eq!(stack.layers.len(), 12, "20 mm / 1.6 mm layers");
+    // Issue 20: the last bead's top is the 1 mm allowance above the 20 mm top: ⌈21/1.6⌉ = 14.
+    assert_eq!(stack.layers.len(), 14, "20 mm + 1 mm / 1.6 mm layers");
     assert!(stack.layers.iter().all(|l| !l.contours.is_empty()));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(report["layers"].as_u64(), Some(12));
+    assert_eq!(report["layers"].as_u64(), Some(14));
+    // The deposit encloses the part with the allowance (to 0.2 mm), and machining it costs.
+    let allowance = report["machining_allowance_mm"].as_f64().unwrap();
+    assert!(report["min_allowance_mm"].as_f64().unwrap() >= allowance - 0.2);
+    assert!(
+        report["deposited_volume_mm3"].as_f64().unwrap()
+            > report["part_volume_mm3"].as_f64().unwrap()
+    );
+    assert!(report["cost"]["machining_sek"].as_f64().unwrap() > 0.0);
     let contours: usize = stack.layers.iter().map(|l| l.contours.len()).sum();
     assert_eq!(report["contours"].as_u64(), Some(contours as u64));
 
@@ -396,6 +407,22 @@ fn cell_slice_names_a_broken_mesh_and_bad_options() {
         assert!(stderr.contains(broken), "{stderr}");
         assert!(!out.join("layers.json").exists());
     }
+    // A part lower than half a layer (idler_riser.STL is drawn in inches: 0.625 high) is an
+    // error naming the file, not an empty program.
+    let thin = stl("idler_riser.STL");
+    let run = cell_slice(&[
+        "--stl".as_ref(),
+        thin.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(65), "{stderr}");
+    assert!(
+        stderr.contains("idler_riser.STL") && stderr.contains("nothing to deposit"),
+        "{stderr}"
+    );
+    assert!(!out.join("layers.json").exists());
     let missing = dir.path().join("nope.stl");
     let run = cell_slice(&[
         "--stl".as_ref(),

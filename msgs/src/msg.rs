@@ -43,6 +43,8 @@ impl Toolpath {
     pub const POWER_ARC_ON: u8 = 3;
     /// Power unit: extrusion rate \[mm³/s\].
     pub const POWER_EXTRUSION_MM3_S: u8 = 4;
+    /// Power unit: arc welding wire feed speed \[m/min\] (0: arc off).
+    pub const POWER_WIRE_FEED_M_MIN: u8 = 5;
 }
 
 /// One continuous run of a toolpath: the tool moves through `points` in order. Units:

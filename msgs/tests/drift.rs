@@ -185,6 +185,7 @@ fn constants_match_their_definitions() {
                 ("POWER_LASER_PERCENT", T::POWER_LASER_PERCENT),
                 ("POWER_ARC_ON", T::POWER_ARC_ON),
                 ("POWER_EXTRUSION_MM3_S", T::POWER_EXTRUSION_MM3_S),
+                ("POWER_WIRE_FEED_M_MIN", T::POWER_WIRE_FEED_M_MIN),
             ],
         ),
         (

@@ -195,6 +195,25 @@ pub enum EmitError {
         /// What needed the axis.
         what: &'static str,
     },
+    /// A robtarget the profile's robot cannot reach within its joint ranges in the program's
+    /// one arm configuration (RAPID with a `robot` section; `rapid/reach.rs`).
+    #[error("layer {layer}, segment {segment} point {point} at ({x:.3}, {y:.3}, {z:.3}) mm in the work object: {problem}")]
+    Reach {
+        /// Layer of the segment.
+        layer: u32,
+        /// Segment index (a bead or a travel).
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// The robtarget position, mm.
+        x: f64,
+        /// The robtarget position, mm.
+        y: f64,
+        /// The robtarget position, mm.
+        z: f64,
+        /// Why (out of reach, a joint range, a configuration change).
+        problem: cell_kinematics::ReachProblem,
+    },
     /// A position outside the machine's travel.
     #[error("segment {segment} point {point}: {violation}")]
     Envelope {
@@ -236,6 +255,17 @@ pub enum EmitError {
         segment: usize,
         /// Point index within the segment.
         point: usize,
+    },
+    /// Program-side arc welding data (RAPID `data: program`) the toolpath cannot give: no
+    /// wire feed, or none > 0 on a weld point.
+    #[error("segment {segment} point {point}: {reason}")]
+    WeldData {
+        /// Segment index.
+        segment: usize,
+        /// Point index within the segment.
+        point: usize,
+        /// What is missing.
+        reason: String,
     },
     /// More part modules than the names allow (RAPID: raise `max_targets_per_module`).
     #[error("the program needs {modules} modules, more than {max}; raise max_targets_per_module")]

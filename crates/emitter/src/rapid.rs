@@ -6,6 +6,8 @@
 //! axes), every move a `MoveL` with speed, zone, tool and work object, and because the bead
 //! width depends on the travel speed, one `speeddata` is declared per distinct speed. The
 //! thesis gives no orientation, zone, tool or arc on/off data; those come from the profile.
+//! With the Arc option the welding data are the program's too (`weld: {mode: arc, data:
+//! program}`, the default): one `welddata` per distinct bead, so the module is self-contained.
 //!
 //! # Output
 //!
@@ -14,10 +16,12 @@
 //! - `WAAM_job42.mod`: the main module, with `PROC main()`;
 //! - `WAAM_job42_1.mod`, `WAAM_job42_2.mod`, …: only when the program has more than
 //!   `max_targets_per_module` points; then `main` calls `WAAM_job42_1_run;`,
-//!   `WAAM_job42_2_run;`, … in order and each part module declares its own targets and speeds;
+//!   `WAAM_job42_2_run;`, … in order and each part module declares its own targets, speeds
+//!   and weld data;
 //! - `WAAM_job42.pgf`: the program file listing every module.
 //!
-//! A small program (arc mode):
+//! A small program (arc mode, `data: program`; two beads at 8 and 10 mm/s, wire feed 5.53
+//! m/min, synergic job 1):
 //!
 //! ```text
 //! MODULE WAAM_job42
@@ -26,15 +30,19 @@
 //!     PERS tooldata tWAAM := [TRUE,[[0,0,400],[1,0,0,0]],[4.5,[0,0,150],[1,0,0,0],0,0,0]];
 //!     LOCAL CONST speeddata vTS1 := [100,500,5000,1000];
 //!     LOCAL CONST speeddata vTS2 := [8,500,5000,1000];
+//!     LOCAL CONST speeddata vTS3 := [10,500,5000,1000];
+//!     LOCAL PERS seamdata seamWAAM := [0.2,0.05,[0,0,0,0,0,0,0,0,0],0,0,0,0,0,…,0.05];
+//!     LOCAL PERS welddata weldWAAM1 := [8,8,[1,0,0,5.53,0,0,0,0,0],[1,0,0,5.53,0,0,0,0,0]];
+//!     LOCAL PERS welddata weldWAAM2 := [10,10,[1,0,0,5.53,0,0,0,0,0],[1,0,0,5.53,0,0,0,0,0]];
 //!     LOCAL CONST robtarget p1 := [[10,20,5],[0,1,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
 //!     …
 //!     PROC main()
 //!         TPWrite jobName;
 //!         ConfL \Off;
 //!         MoveL p1, vTS1, z1, tWAAM\WObj:=wobjPlate;
-//!         ArcLStart p2, vTS2, seamWAAM, weldWAAM, fine, tWAAM\WObj:=wobjPlate;
-//!         ArcL p3, vTS2, seamWAAM, weldWAAM, z1, tWAAM\WObj:=wobjPlate;
-//!         ArcLEnd p4, vTS2, seamWAAM, weldWAAM, fine, tWAAM\WObj:=wobjPlate;
+//!         ArcLStart p2, vTS1, seamWAAM, weldWAAM1, fine, tWAAM\WObj:=wobjPlate;
+//!         ArcL p3, vTS2, seamWAAM, weldWAAM1, z1, tWAAM\WObj:=wobjPlate;
+//!         ArcLEnd p4, vTS3, seamWAAM, weldWAAM2, fine, tWAAM\WObj:=wobjPlate;
 //!     ENDPROC
 //! ENDMODULE
 //! ```
@@ -44,17 +52,21 @@
 //! let profile = cell_profiles::MachineProfile::resolve("abb-irb2600-waam").unwrap();
 //! let p = |x| Point { x, y: 100.0, z: 10.0 };
 //! let toolpath = Toolpath {
+//!     power_unit: Toolpath::POWER_WIRE_FEED_M_MIN,
 //!     segments: vec![ToolpathSegment {
 //!         kind: ToolpathSegment::KIND_DEPOSIT,
 //!         points: vec![p(100.0), p(150.0)],
 //!         feed_mm_s: vec![8.0, 8.0],
+//!         power: vec![5.53, 5.53],
 //!         ..Default::default()
 //!     }],
 //!     ..Default::default()
 //! };
 //! let files = cell_emitter::rapid::emit(&toolpath, &profile, "job42").unwrap();
 //! assert_eq!(files[0].name, "WAAM_job42.mod");
-//! assert!(files[0].text.contains("ArcLStart p1, vTS1, seamWAAM, weldWAAM, fine, tWAAM"));
+//! let text = &files[0].text;
+//! assert!(text.contains("LOCAL PERS welddata weldWAAM1 := [8,8,[1,0,0,5.53,0,0,0,0,0],"));
+//! assert!(text.contains("ArcLStart p1, vTS1, seamWAAM, weldWAAM1, fine, tWAAM"));
 //! assert_eq!(files.last().unwrap().name, "WAAM_job42.pgf");
 //! ```
 //!
@@ -76,13 +88,26 @@
 //!   executes logical instructions ahead of the motion); the last move of the program is
 //!   `fine`; every other point uses the profile's zone.
 //!   - `arc`: `ArcLStart` to the run's first point, `ArcL` through, `ArcLEnd` at its last.
+//!     While welding the TCP runs at the welddata's `weld_speed`, not the speeddata's.
+//!     - `data: program` (default): a bead is (the move's speed, the toolpath's wire feed at
+//!       the point, m/min to 3 decimals; the toolpath's `power` in
+//!       `POWER_WIRE_FEED_M_MIN`, else an error); the move *to* a point welds that point's
+//!       bead, `ArcLStart` carries the run's first bead. Welddata `weld1`, `weld2`, … (`weld`
+//!       is the profile's prefix) are numbered in order of first use over the whole program,
+//!       `[weld_speed, weld_speed, arc, arc]` with `arc` = `[sched, mode, voltage, wirefeed,
+//!       control, current, 0, 0, 0]` from the profile's `arc` and the bead's wire feed; one
+//!       `seamdata` (ABB's default with the profile's gas times). Both are `LOCAL PERS` in
+//!       every module that welds (layouts and sources: `rapid/weld.rs`).
+//!     - `data: controller`: every weld instruction names the profile's `seam` and `weld`,
+//!       which the controller must declare (the RWS simulator checks this on load).
 //!   - `digital_output`: `SetDO signal, 0;` at the start of `main`; `MoveL` to the first point,
 //!     `SetDO signal, 1;`, `MoveL` through, `SetDO signal, 0;` after the last.
 //! - **Splitting**: a program of more than `max_targets_per_module` points is cut into part
 //!   modules of at most that many, preferably between weld runs (a run longer than the limit
 //!   is cut inside; the process stays on across the call). Data in every module is `LOCAL`,
 //!   so parts may reuse names; the tool, work object and zone (declared in the main module)
-//!   and the part procedures are global.
+//!   and the part procedures are global. A welddata keeps its number (and value) in every
+//!   module that uses it.
 //!
 //! # User text
 //!
@@ -97,13 +122,16 @@ use std::fmt::Write as _;
 
 use cell_msgs::{ProgramFile, Toolpath, ToolpathSegment};
 use cell_profiles::rapid::{
-    check_identifier, is_generated_name, RobotWare, WeldMode, MAX_IDENTIFIER_LEN, MAX_STRING_LEN,
-    RESERVED_WORDS,
+    check_identifier, is_generated_name, is_welddata_name, welddata_name, RobotWare,
+    WeldDataSource, WeldMode, MAX_IDENTIFIER_LEN, MAX_STRING_LEN, RESERVED_WORDS,
 };
 use cell_profiles::{MachineProfile, RapidSettings};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
 use crate::EmitError;
+
+pub mod reach;
+mod weld;
 
 /// Decimal places of positions, mm (1 µm).
 const POSITION_DECIMALS: usize = 3;
@@ -130,6 +158,11 @@ struct Move {
     welded: bool,
     run_start: bool,
     run_end: bool,
+    /// The bead welded on the way to this point (a run's first point: the run's first bead),
+    /// when the program declares its welddata.
+    bead: Option<weld::Bead>,
+    /// The computed `[cf1, cf4, cf6, cfx]` when the profile has a robot ([`reach`]).
+    robconf: Option<[i32; 4]>,
 }
 
 /// The RAPID files for `toolpath` on `profile` (module docs): the main module first, then the
@@ -180,10 +213,31 @@ pub fn emit(
             .entry(m.speed.as_str())
             .or_insert_with(|| format!("vTS{next}"));
     }
+    // Welddata names (data: program), in order of first use like the speeds.
+    let mut weld_names: HashMap<&weld::Bead, String> = HashMap::new();
+    if let WeldMode::Arc { weld: prefix, .. } = &r.weld {
+        for b in moves.iter().filter_map(|m| m.bead.as_ref()) {
+            let next = weld_names.len() + 1;
+            weld_names
+                .entry(b)
+                .or_insert_with(|| welddata_name(prefix, next));
+        }
+    }
+    if let Some(name) = weld_names.values().find(|n| check_identifier(n).is_err()) {
+        return Err(EmitError::Identifier {
+            name: name.clone(),
+            reason: format!(
+                "{} distinct beads: more welddata than RAPID names allow (at most {} characters)",
+                weld_names.len(),
+                MAX_IDENTIFIER_LEN
+            ),
+        });
+    }
     let w = Writer {
         r,
         moves: &moves,
         speed_names: &speed_names,
+        weld_names: &weld_names,
     };
     let header = format!(
         "! cellsuite emitter: job {}, profile {}",
@@ -297,6 +351,7 @@ struct Writer<'a> {
     r: &'a RapidSettings,
     moves: &'a [Move],
     speed_names: &'a HashMap<&'a str, String>,
+    weld_names: &'a HashMap<&'a weld::Bead, String>,
 }
 
 impl Writer<'_> {
@@ -368,9 +423,10 @@ impl Writer<'_> {
                 num(self.r.orientation_speed_deg_s, 1)
             );
         }
-        let [cf1, cf4, cf6, cfx] = self.r.robconf;
+        self.weld_declarations(out, range.clone());
         for i in range {
             let m = &self.moves[i];
+            let [cf1, cf4, cf6, cfx] = m.robconf.unwrap_or(self.r.robconf);
             let _ = writeln!(
                 out,
                 "    LOCAL CONST robtarget p{} := [{},{},[{cf1},{cf4},{cf6},{cfx}],{NO_EXTERNAL_AXES}];",
@@ -381,10 +437,55 @@ impl Writer<'_> {
         }
     }
 
+    /// With `data: program`: the seamdata and the welddata the moves in `range` weld with
+    /// (`LOCAL PERS`, [`weld`]), welddata in the order of their numbers.
+    fn weld_declarations(&self, out: &mut String, range: std::ops::Range<usize>) {
+        let WeldMode::Arc {
+            data: WeldDataSource::Program,
+            seam,
+            arc: Some(arc),
+            seam_value,
+            ..
+        } = &self.r.weld
+        else {
+            return;
+        };
+        let mut used: Vec<(&weld::Bead, &str)> = Vec::new();
+        for b in self.moves[range].iter().filter_map(|m| m.bead.as_ref()) {
+            if !used.iter().any(|(u, _)| *u == b) {
+                used.push((b, self.weld_names.get(b).map_or("", String::as_str)));
+            }
+        }
+        if used.is_empty() {
+            return;
+        }
+        let _ = writeln!(
+            out,
+            "    LOCAL PERS seamdata {seam} := {};",
+            weld::seamdata(&seam_value.clone().unwrap_or_default())
+        );
+        let number = |name: &str| {
+            name.trim_start_matches(|c: char| !c.is_ascii_digit())
+                .parse::<usize>()
+                .unwrap_or(usize::MAX)
+        };
+        used.sort_by_key(|(_, name)| number(name));
+        for (bead, name) in used {
+            let _ = writeln!(
+                out,
+                "    LOCAL PERS welddata {name} := {};",
+                weld::welddata(bead, arc)
+            );
+        }
+    }
+
     /// The first statements of `main`.
     fn main_start(&self, out: &mut String) {
         let _ = writeln!(out, "        TPWrite jobName;");
-        if self.r.confl_off {
+        // Computed configurations are enforced (`reach`); fixed ones are a hint.
+        if self.moves.iter().any(|m| m.robconf.is_some()) {
+            let _ = writeln!(out, "        ConfL \\On;");
+        } else if self.r.confl_off {
             let _ = writeln!(out, "        ConfL \\Off;");
         }
         if let WeldMode::DigitalOutput { signal } = &self.r.weld {
@@ -411,7 +512,12 @@ impl Writer<'_> {
                 r.zone.name.as_str()
             };
             match (&r.weld, m.welded) {
-                (WeldMode::Arc { seam, weld }, true) => {
+                (WeldMode::Arc { seam, weld, .. }, true) => {
+                    let weld = m
+                        .bead
+                        .as_ref()
+                        .and_then(|b| self.weld_names.get(b))
+                        .unwrap_or(weld);
                     let instruction = if m.run_start {
                         "ArcLStart"
                     } else if m.run_end {
@@ -451,6 +557,13 @@ fn moves(
     // (segment, point) of each move, for the weld-run check.
     let mut at: Vec<(usize, usize)> = Vec::new();
     let default_quat = canonical(normalised(r.default_orientation));
+    let program_weld_data = matches!(
+        r.weld,
+        WeldMode::Arc {
+            data: WeldDataSource::Program,
+            ..
+        }
+    );
     for (si, seg) in toolpath.segments.iter().enumerate() {
         crate::check_lengths(seg, si, true)?;
         let welded = seg.kind != ToolpathSegment::KIND_TRAVEL;
@@ -526,6 +639,14 @@ fn moves(
                     point: pi,
                     violation,
                 })?;
+            let bead = if welded && program_weld_data {
+                Some(weld::Bead {
+                    speed: speed.clone(),
+                    wire_feed: wire_feed(toolpath, si, pi)?,
+                })
+            } else {
+                None
+            };
             out.push(Move {
                 position: [p.x, p.y, p.z],
                 quat,
@@ -533,6 +654,8 @@ fn moves(
                 welded,
                 run_start: false,
                 run_end: false,
+                bead,
+                robconf: None,
             });
             at.push((si, pi));
         }
@@ -579,6 +702,10 @@ fn moves(
         }
         out[i].run_start = start;
         out[i].run_end = end;
+        if start {
+            // The arc starts at the run's first point with the run's first bead.
+            out[i].bead = out[i + 1].bead.clone();
+        }
         if let Some(speed) = travel_before[i].take() {
             out[i].speed = speed;
         } else if start && i > 0 {
@@ -587,7 +714,35 @@ fn moves(
             out[i].speed = out[i - 1].speed.clone();
         }
     }
+    reach::assign_robconf(&mut out, &at, toolpath, profile)?;
     Ok(out)
+}
+
+/// The wire feed (m/min, as written) of point `pi` of segment `si`, for program-side
+/// welddata: the toolpath must carry it as its power ([`Toolpath::POWER_WIRE_FEED_M_MIN`],
+/// what `cell_waam::to_msg` writes), > 0 on every welded point.
+fn wire_feed(toolpath: &Toolpath, si: usize, pi: usize) -> Result<String, EmitError> {
+    let at = |reason: String| EmitError::WeldData {
+        segment: si,
+        point: pi,
+        reason,
+    };
+    if toolpath.power_unit != Toolpath::POWER_WIRE_FEED_M_MIN {
+        return Err(at(format!(
+            "the program declares its welddata (rapid.weld.data: program) and needs the wire feed, but the toolpath's power_unit is {} (not POWER_WIRE_FEED_M_MIN = {}); plan it with the WAAM slicer or use data: controller",
+            toolpath.power_unit,
+            Toolpath::POWER_WIRE_FEED_M_MIN
+        )));
+    }
+    let v = toolpath.segments[si].power.get(pi).copied();
+    let text = v.map(|v| num(f64::from(v), weld::WIRE_FEED_DECIMALS));
+    match (v, text) {
+        (Some(v), Some(text)) if v > 0.0 && text != "0" => Ok(text),
+        (v, _) => Err(at(format!(
+            "wire feed {} m/min on a weld point; it must be > 0",
+            v.map_or("missing".to_string(), |v| v.to_string())
+        ))),
+    }
 }
 
 /// The tool orientation for a toolpath normal `n`, as a RAPID quaternion [q1, q2, q3, q4] =
@@ -693,13 +848,34 @@ fn base_name(r: &RapidSettings, job_id: &str) -> Result<String, EmitError> {
         r.wobj.name.as_str(),
         r.zone.name.as_str(),
     ];
+    let mut welddata_prefix = None;
     match &r.weld {
-        WeldMode::Arc { seam, weld } => profile_names.extend([seam.as_str(), weld.as_str()]),
+        WeldMode::Arc {
+            seam, weld, data, ..
+        } => {
+            profile_names.extend([seam.as_str(), weld.as_str()]);
+            if *data == WeldDataSource::Program {
+                welddata_prefix = Some(weld.as_str());
+            }
+        }
         WeldMode::DigitalOutput { signal } => profile_names.push(signal),
     }
+    // A module or procedure name of this base (`b`, `b_N`, `b_N_run`) that has the form of a
+    // declared welddata name (prefix + digits).
+    let is_welddata = |b: &str| {
+        welddata_prefix.is_some_and(|w| {
+            is_welddata_name(w, b)
+                || (w.len() > b.len()
+                    && w.is_char_boundary(b.len())
+                    && w[..b.len()].eq_ignore_ascii_case(b)
+                    && w[b.len()..].starts_with('_')
+                    && w[b.len() + 1..].chars().all(|c| c.is_ascii_digit()))
+        })
+    };
     let clashes = |b: &str| {
         RESERVED_WORDS.contains(&b.to_ascii_uppercase().as_str())
             || is_generated_name(b)
+            || is_welddata(b)
             || profile_names.iter().any(|n| n.eq_ignore_ascii_case(b))
             // A part module or procedure name of this base would equal a profile name.
             || profile_names.iter().any(|n| {

@@ -10,22 +10,27 @@ use cell_emitter::rapid::{self, orientation_from_normal};
 use cell_emitter::EmitError;
 use cell_msgs::geometry_msgs::{Point, Vector3};
 use cell_msgs::{ProgramFile, Toolpath, ToolpathSegment};
-use cell_profiles::rapid::{RobotWare, WeldMode};
+use cell_profiles::rapid::{RobotWare, WeldDataSource, WeldMode};
 use cell_profiles::MachineProfile;
 use rapid_check::{check_pgf, check_program, lex, Summary, Tok};
 
 const DEPOSIT: u8 = ToolpathSegment::KIND_DEPOSIT;
 const TRAVEL: u8 = ToolpathSegment::KIND_TRAVEL;
+/// Wire feed of every deposit point, m/min (seed 004 Chart 2's highest, the process default).
+const WIRE_FEED: f32 = 5.53;
 
 fn profile(name: &str) -> MachineProfile {
     MachineProfile::resolve(name).unwrap()
 }
 
+/// A segment; deposit points carry the wire feed as their power, travel points 0.
 fn seg(kind: u8, pts: &[(f64, f64, f64)], feed: f32) -> ToolpathSegment {
+    let wire_feed = if kind == TRAVEL { 0.0 } else { WIRE_FEED };
     ToolpathSegment {
         kind,
         points: pts.iter().map(|&(x, y, z)| Point { x, y, z }).collect(),
         feed_mm_s: vec![feed; pts.len()],
+        power: vec![wire_feed; pts.len()],
         ..Default::default()
     }
 }
@@ -44,6 +49,7 @@ fn with_normals(mut s: ToolpathSegment, n: (f64, f64, f64)) -> ToolpathSegment {
 
 fn toolpath(segments: Vec<ToolpathSegment>) -> Toolpath {
     Toolpath {
+        power_unit: Toolpath::POWER_WIRE_FEED_M_MIN,
         segments,
         ..Default::default()
     }
@@ -53,8 +59,8 @@ fn points(tp: &Toolpath) -> usize {
     tp.segments.iter().map(|s| s.points.len()).sum()
 }
 
-/// Names the controller has (the profile's weld data or signal); tools and work objects
-/// without a value too.
+/// Names the controller has (the profile's weld data with `data: controller`, or signal);
+/// tools and work objects without a value too.
 fn externals(p: &MachineProfile) -> Vec<String> {
     let r = p.rapid.as_ref().unwrap();
     let mut out = vec![
@@ -63,7 +69,13 @@ fn externals(p: &MachineProfile) -> Vec<String> {
         r.zone.name.clone(),
     ];
     match &r.weld {
-        WeldMode::Arc { seam, weld } => out.extend([seam.clone(), weld.clone()]),
+        WeldMode::Arc {
+            seam,
+            weld,
+            data: WeldDataSource::Controller,
+            ..
+        } => out.extend([seam.clone(), weld.clone()]),
+        WeldMode::Arc { .. } => {}
         WeldMode::DigitalOutput { signal } => out.push(signal.clone()),
     }
     out.retain(|n| match n.as_str() {
@@ -394,8 +406,237 @@ fn arc_mode_maps_runs_to_arclstart_arcl_arclend_with_fine_ends() {
             assert!(l.contains(", fine, tWAAM\\WObj:=wobjPlate;"), "{l}");
         }
         if l.starts_with("ArcL ") {
-            assert!(l.contains(", seamWAAM, weldWAAM, z1, "), "{l}");
+            // data: program: the bead's own welddata, weldWAAM1, weldWAAM2, …
+            assert!(
+                l.contains(", seamWAAM, weldWAAM") && l.contains(", z1, "),
+                "{l}"
+            );
         }
+    }
+}
+
+// ---- welding data --------------------------------------------------------------------------
+
+/// The welddata each weld instruction names, in order: (instruction, target, welddata).
+fn weld_calls(text: &str) -> Vec<(String, String, String)> {
+    text.lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("ArcL"))
+        .map(|l| {
+            let (head, args) = l.split_once(' ').unwrap();
+            let args: Vec<&str> = args.split(", ").collect();
+            (head.to_string(), args[0].to_string(), args[3].to_string())
+        })
+        .collect()
+}
+
+/// The value of the declaration `LOCAL PERS <ty> <name> := <value>;` in `text`.
+fn pers_value<'a>(text: &'a str, ty: &str, name: &str) -> Option<&'a str> {
+    let head = format!("LOCAL PERS {ty} {name} := ");
+    text.lines()
+        .map(str::trim)
+        .find_map(|l| l.strip_prefix(head.as_str()))
+        .map(|v| v.trim_end_matches(';'))
+}
+
+/// The numbers of a RAPID aggregate, flattened.
+fn numbers(value: &str) -> Vec<f64> {
+    value
+        .split(['[', ']', ','])
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse().unwrap())
+        .collect()
+}
+
+#[test]
+fn the_program_declares_one_welddata_per_distinct_bead_with_its_speed_and_wire_feed() {
+    let p = profile("abb-irb2600-waam");
+    // Beads: run 1 at 8 mm/s; run 2 at 10, 10 and 12.5 mm/s, its first bead with another
+    // wire feed (4.39 m/min) at the same speed as the run's start point, whose own values
+    // belong to the approach and weld nothing.
+    let mut tp = arc_path();
+    tp.segments[3].power[1] = 4.39;
+    let files = rapid::emit(&tp, &p, "beads").unwrap();
+    let s = check(&files, &p);
+    let text = &files[0].text;
+    assert_eq!(s.declared("seamdata"), ["seamWAAM"]);
+    assert_eq!(
+        s.declared("welddata"),
+        ["weldWAAM1", "weldWAAM2", "weldWAAM3"],
+        "{text}"
+    );
+    // Every weld instruction welds its own point's bead (the run's first: the first bead),
+    // with the toolpath's speed and wire feed in the welddata.
+    let calls = weld_calls(text);
+    let expected = [
+        ("ArcLStart", "p3", 8.0, 5.53),
+        ("ArcL", "p4", 8.0, 5.53),
+        ("ArcLEnd", "p5", 8.0, 5.53),
+        ("ArcLStart", "p8", 10.0, 4.39),
+        ("ArcL", "p9", 10.0, 4.39),
+        ("ArcLEnd", "p10", 12.5, 5.53),
+    ];
+    assert_eq!(calls.len(), expected.len(), "{text}");
+    let arc = |welddata: &str| numbers(pers_value(text, "welddata", welddata).unwrap());
+    for ((head, target, weld), (want_head, want_target, speed, wire_feed)) in
+        calls.iter().zip(expected)
+    {
+        assert_eq!((head.as_str(), target.as_str()), (want_head, want_target));
+        let v = arc(weld);
+        // [weld_speed, org_weld_speed, [sched, mode, voltage, wirefeed, control, current, …],
+        //  org_arc]: the profile's synergic job 1, voltage and current from the job.
+        assert_eq!(v.len(), 2 + 9 + 9, "{weld}: {v:?}");
+        assert_eq!((v[0], v[1]), (speed, speed), "{weld}");
+        assert_eq!(
+            &v[2..11],
+            &[1.0, 0.0, 0.0, wire_feed, 0.0, 0.0, 0.0, 0.0, 0.0],
+            "{weld}"
+        );
+        assert_eq!(&v[2..11], &v[11..20], "org_arc = main_arc");
+    }
+    // The welddata of 10 mm/s at 4.39 and 12.5 mm/s at 5.53 are distinct from the first.
+    let distinct: std::collections::BTreeSet<&str> =
+        calls.iter().map(|(_, _, w)| w.as_str()).collect();
+    assert_eq!(distinct.len(), 3, "{calls:?}");
+    let seam = numbers(pers_value(text, "seamdata", "seamWAAM").unwrap());
+    // 16 components, 4 of them arcdata: 12 + 4 * 9 numbers; purge, preflow, postflow first
+    // and last as the profile gives them.
+    assert_eq!(seam.len(), 12 + 4 * 9);
+    assert_eq!((seam[0], seam[1], seam[seam.len() - 1]), (0.2, 0.05, 0.05));
+    // Speeddata stay as they were for the moves.
+    assert_eq!(s.declared("speeddata"), ["vTS1", "vTS2", "vTS3", "vTS4"]);
+}
+
+#[test]
+fn a_width_change_in_the_plan_is_a_welddata_change() {
+    // One run whose second half is planned narrower (faster, seed 004 eq. 14).
+    let p = profile("abb-irb2600-waam");
+    let mut s = seg(
+        DEPOSIT,
+        &[
+            (100.0, 100.0, 2.0),
+            (150.0, 100.0, 2.0),
+            (200.0, 100.0, 2.0),
+            (250.0, 100.0, 2.0),
+        ],
+        7.0,
+    );
+    s.feed_mm_s = vec![7.0, 7.0, 9.5, 9.5];
+    let files = rapid::emit(&toolpath(vec![s]), &p, "w").unwrap();
+    check(&files, &p);
+    let text = &files[0].text;
+    let welds: Vec<String> = weld_calls(text).into_iter().map(|c| c.2).collect();
+    assert_eq!(welds, ["weldWAAM1", "weldWAAM1", "weldWAAM2", "weldWAAM2"]);
+    assert_eq!(
+        numbers(pers_value(text, "welddata", "weldWAAM1").unwrap())[0],
+        7.0
+    );
+    assert_eq!(
+        numbers(pers_value(text, "welddata", "weldWAAM2").unwrap())[0],
+        9.5
+    );
+}
+
+#[test]
+fn controller_data_are_named_and_not_declared() {
+    let mut p = profile("abb-irb2600-waam");
+    if let WeldMode::Arc {
+        data,
+        arc,
+        seam_value,
+        ..
+    } = &mut p.rapid.as_mut().unwrap().weld
+    {
+        *data = WeldDataSource::Controller;
+        *arc = None;
+        *seam_value = None;
+    }
+    p.validate("test").unwrap();
+    // The wire feed is not needed either.
+    let mut tp = arc_path();
+    tp.power_unit = cell_msgs::Toolpath::POWER_ARC_ON;
+    let files = rapid::emit(&tp, &p, "w").unwrap();
+    let text = &files[0].text;
+    assert!(
+        !text.contains("seamdata") && !text.contains("welddata"),
+        "{text}"
+    );
+    assert!(weld_calls(text).iter().all(|c| c.2 == "weldWAAM"));
+    check(&files, &p);
+    // Without the controller's data the program does not stand on its own.
+    let modules: Vec<(&str, &str)> = files[..1]
+        .iter()
+        .map(|f| (f.name.as_str(), f.text.as_str()))
+        .collect();
+    let e = check_program(&modules, &[]).unwrap_err();
+    assert!(e.contains("seamWAAM is used before it is declared"), "{e}");
+}
+
+#[test]
+fn split_modules_declare_the_weld_data_they_use() {
+    let p = split_profile(RobotWare::Rw6);
+    let files = rapid::emit(&arc_path(), &p, "w").unwrap();
+    let s = check(&files, &p);
+    // Parts [T T] [R R R T] [T R R R]: the main module and the first part do not weld.
+    let welding: Vec<&String> = s
+        .declarations
+        .iter()
+        .filter(|(_, t, _)| t == "seamdata")
+        .map(|(m, _, _)| m)
+        .collect();
+    assert_eq!(welding, ["WAAM_w_2", "WAAM_w_3"]);
+    // A welddata has one number and one value across the program.
+    let mut values: std::collections::BTreeMap<String, &str> = Default::default();
+    for f in &files[1..files.len() - 1] {
+        for (name, _) in weld_calls(&f.text).iter().map(|c| (c.2.clone(), ())) {
+            let v = pers_value(&f.text, "welddata", &name).unwrap();
+            assert_eq!(*values.entry(name).or_insert(v), v);
+        }
+    }
+    assert_eq!(values.len(), 3, "{values:?}");
+}
+
+#[test]
+fn program_weld_data_need_the_wire_feed() {
+    let p = profile("abb-irb2600-waam");
+    let mut tp = arc_path();
+    tp.power_unit = cell_msgs::Toolpath::POWER_ARC_ON;
+    let e = rapid::emit(&tp, &p, "w").unwrap_err();
+    assert!(
+        matches!(
+            e,
+            EmitError::WeldData {
+                segment: 1,
+                point: 0,
+                ..
+            }
+        ) && e.to_string().contains("POWER_WIRE_FEED_M_MIN"),
+        "{e}"
+    );
+    let mut tp = arc_path();
+    tp.segments[3].power[2] = 0.0;
+    let e = rapid::emit(&tp, &p, "w").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "segment 3 point 2: wire feed 0 m/min on a weld point; it must be > 0"
+    );
+    let mut tp = arc_path();
+    tp.segments[1].power.clear();
+    let e = rapid::emit(&tp, &p, "w").unwrap_err();
+    assert!(e.to_string().contains("wire feed missing"), "{e}");
+}
+
+#[test]
+fn module_names_never_take_a_welddata_name() {
+    let mut p = profile("abb-irb2600-waam");
+    p.rapid.as_mut().unwrap().module_prefix = String::new();
+    for (job, module) in [
+        ("weldWAAM2", "J_weldWAAM2.mod"),
+        ("weldWAAMx", "weldWAAMx.mod"),
+    ] {
+        let files = rapid::emit(&arc_path(), &p, job).unwrap();
+        assert_eq!(files[0].name, module);
+        check(&files, &p);
     }
 }
 

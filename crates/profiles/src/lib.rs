@@ -16,7 +16,7 @@
 //!
 //! One file per concept: [`machine`] (the profile, its axes and feed limit, loading and the
 //! section-by-section check), [`hotwire`] (the towers), [`gcode`] and [`template`] (G-code
-//! output), [`rapid`] (ABB RAPID output), [`cutting`] (sheet cutting: kerf table, lead-ins,
+//! output), [`rapid`] (ABB RAPID output), [`robot`] (the arm's kinematics for RAPID), [`cutting`] (sheet cutting: kerf table, lead-ins,
 //! compensation), [`envelope`] (positions against the travel), [`error`]. Errors have the shape of [`cell_config`]: `FILE[:LINE]: field `PATH`: what`.
 
 pub mod cutting;
@@ -26,6 +26,7 @@ pub mod gcode;
 pub mod hotwire;
 pub mod machine;
 pub mod rapid;
+pub mod robot;
 pub mod template;
 
 pub use cutting::{
@@ -40,6 +41,7 @@ pub use gcode::{
 pub use hotwire::HotwireGeometry;
 pub use machine::{MachineProfile, Process};
 pub use rapid::RapidSettings;
+pub use robot::{FrameValue, OpwParameters, RobotSection};
 pub use template::TEMPLATE_PLACEHOLDERS;
 
 /// The profiles shipped in `config/machines/`, compiled in: (name, YAML text).

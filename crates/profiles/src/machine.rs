@@ -8,7 +8,7 @@ use cell_config::{Allowed, FieldError};
 
 use crate::{
     Compensation, CuttingSection, Dialect, GcodeSettings, HotwireGeometry, ProfileError,
-    RapidSettings, EMBEDDED_PROFILES,
+    RapidSettings, RobotSection, EMBEDDED_PROFILES,
 };
 
 /// The process a machine runs.
@@ -49,6 +49,10 @@ pub struct MachineProfile {
     /// How the emitter writes ABB RAPID for this robot; exclusive with `gcode`.
     #[serde(default)]
     pub rapid: Option<RapidSettings>,
+    /// The robot arm (kinematic model, joint ranges, base frame) for a RAPID machine; absent:
+    /// the emitter writes the fixed `rapid.robconf` (see `robot.rs`).
+    #[serde(default)]
+    pub robot: Option<RobotSection>,
     /// Sheet cutting: kerf compensation, lead-ins and the kerf table (`sheet_cut` machines
     /// only).
     #[serde(default)]
@@ -139,6 +143,11 @@ impl MachineProfile {
                 ));
             }
             r.validate(self).map_err(|e| e.within("rapid"))?;
+        }
+        if let Some(robot) = &self.robot {
+            robot
+                .validate(self.rapid.as_ref())
+                .map_err(|e| e.within("robot"))?;
         }
         if let Some(c) = &self.cutting {
             self.validate_cutting(c)?;

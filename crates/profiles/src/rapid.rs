@@ -12,7 +12,8 @@
 //!   tool: {name: tWAAM, value: {tcp_mm: [0, 0, 250], mass_kg: 5.0, cog_mm: [0, 0, 100]}}
 //!   wobj: {name: wobjTable, value: {uframe_mm: [900, 0, 300]}}
 //!   zone: {name: z1}
-//!   weld: {mode: arc, seam: seamWAAM, weld: weldWAAM}
+//!   weld: {mode: arc, data: program, seam: seamWAAM, weld: weldWAAM, arc: {sched: 1}}
+//!   # or the controller's data, by name: {mode: arc, data: controller, seam: …, weld: …}
 //! ```
 //!
 //! Every name that goes into the program is checked against RAPID's identifier rules
@@ -259,12 +260,27 @@ pub enum WeldMode {
     /// RobotWare Arc option: `ArcLStart` to the first point of a weld run, `ArcL` through it,
     /// `ArcLEnd` at its last point. Note: during the weld the TCP speed is the `weld_speed`
     /// of the welddata, not the speeddata (RobotWare Arc manual, `ArcL`, argument `Speed`);
-    /// the per-point speeddata still govern the approach (`ArcLStart`).
+    /// the per-point speeddata still govern the approach (`ArcLStart`). So with
+    /// `data: program` every distinct bead (travel speed, wire feed) gets its own welddata:
+    /// a width change in the plan is a weld speed change on the robot (seed 004 eq. 14).
     Arc {
-        /// `seamdata` name (ignition and fill), declared on the controller.
+        /// Where the seamdata and welddata live. Default `program`.
+        #[serde(default)]
+        data: WeldDataSource,
+        /// `seamdata` name (ignition, fill, gas times): declared by the program (`program`)
+        /// or on the controller (`controller`).
         seam: String,
-        /// `welddata` name (weld speed, voltage, wire feed), declared on the controller.
+        /// `controller`: the `welddata` declared on the controller. `program`: the prefix of
+        /// the welddata the program declares, one per bead, `weld1`, `weld2`, … (at most
+        /// [`MAX_WELD_PREFIX_LEN`] characters).
         weld: String,
+        /// `program` only (required there): the power source settings of every bead's
+        /// `arcdata`; the wire feed comes from the toolpath.
+        #[serde(default)]
+        arc: Option<ArcValue>,
+        /// `program` only: the seamdata's gas times. Default ABB's default seamdata.
+        #[serde(default)]
+        seam_value: Option<SeamValue>,
     },
     /// A digital output switches the process: `MoveL` to the start point (`fine`),
     /// `SetDO signal, 1;`, `MoveL` through the run, `SetDO signal, 0;` after its last point
@@ -273,6 +289,98 @@ pub enum WeldMode {
         /// The output's name in the controller's I/O configuration, e.g. `doWeld`.
         signal: String,
     },
+}
+
+/// Where the arc-welding data (`seamdata`, `welddata`) of an `arc` weld mode live.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WeldDataSource {
+    /// The program declares them (`LOCAL PERS` in each module that welds): one welddata per
+    /// distinct bead, from the toolpath's travel speed and wire feed and the profile's `arc`.
+    /// The program is self-contained.
+    #[default]
+    Program,
+    /// The controller holds them (a system module or a loaded data module): the program only
+    /// names `seam` and `weld`, and every bead runs at that one welddata's `weld_speed`.
+    Controller,
+}
+
+/// The power source part of every bead's `arcdata` (RobotWare Arc: `arcdata := [sched,
+/// mode, voltage, wirefeed, control, current, voltage2, wirefeed2, control2]`); the wire
+/// feed is the toolpath's. Which components a power source reads depends on its
+/// configuration: a synergic one takes the job (`sched`) and the wire feed and sets voltage
+/// and current itself (leave them 0).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArcValue {
+    /// Schedule: the power source's synergic job / program number (0: none).
+    #[serde(default)]
+    pub sched: u32,
+    /// The power source's weld mode (e.g. Fronius: 0 standard, 1 pulse).
+    #[serde(default)]
+    pub mode: u32,
+    /// Arc voltage, V (0: set by the synergic job).
+    #[serde(default)]
+    pub voltage_v: f64,
+    /// Weld current, A (0: set by the synergic job).
+    #[serde(default)]
+    pub current_a: f64,
+    /// Arc control (arc length correction, inductance: power source specific).
+    #[serde(default)]
+    pub control: f64,
+}
+
+/// The gas times of the declared `seamdata`, s. Defaults: ABB's default seamdata (`purge`
+/// 0.2, `preflow` 0.05, `postflow` 0.05); the other components (ignition, heat, fill and
+/// burnback arcs) are 0 = not used.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeamValue {
+    /// Gas purge time before the first weld, s.
+    #[serde(default = "default_purge_s")]
+    pub purge_s: f64,
+    /// Gas preflow before ignition, s.
+    #[serde(default = "default_flow_s")]
+    pub preflow_s: f64,
+    /// Gas postflow after the arc is off, s.
+    #[serde(default = "default_flow_s")]
+    pub postflow_s: f64,
+}
+
+impl Default for SeamValue {
+    fn default() -> Self {
+        SeamValue {
+            purge_s: default_purge_s(),
+            preflow_s: default_flow_s(),
+            postflow_s: default_flow_s(),
+        }
+    }
+}
+
+fn default_purge_s() -> f64 {
+    0.2
+}
+
+fn default_flow_s() -> f64 {
+    0.05
+}
+
+/// Longest welddata prefix (`weld` with `data: program`): room for five digits within
+/// [`MAX_IDENTIFIER_LEN`].
+pub const MAX_WELD_PREFIX_LEN: usize = MAX_IDENTIFIER_LEN - 5;
+
+/// The name of the `n`th (1-based) welddata a program declares with prefix `weld`.
+pub fn welddata_name(weld: &str, n: usize) -> String {
+    format!("{weld}{n}")
+}
+
+/// True if `name` (any case) is `weld` followed by digits: a welddata name the program
+/// declares with that prefix.
+pub fn is_welddata_name(weld: &str, name: &str) -> bool {
+    name.len() > weld.len()
+        && name.is_char_boundary(weld.len())
+        && name[..weld.len()].eq_ignore_ascii_case(weld)
+        && name[weld.len()..].chars().all(|c| c.is_ascii_digit())
 }
 
 /// How the emitter writes RAPID for one robot (module docs).
@@ -409,6 +517,7 @@ impl RapidSettings {
     pub fn validate(&self, profile: &crate::MachineProfile) -> Result<(), FieldError> {
         self.validate_modules()?;
         self.validate_names()?;
+        self.validate_weld()?;
         self.validate_data()?;
         self.validate_motion(profile)
     }
@@ -446,7 +555,7 @@ impl RapidSettings {
             ("zone.name", &self.zone.name),
         ];
         match &self.weld {
-            WeldMode::Arc { seam, weld } => {
+            WeldMode::Arc { seam, weld, .. } => {
                 names.push(("weld.seam", seam));
                 names.push(("weld.weld", weld));
             }
@@ -486,6 +595,86 @@ impl RapidSettings {
                     format!("{name:?} is predefined by ABB; declare the value under another name or drop `value`"),
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// The arc weld data: with `data: program` an `arc` that sets the arc (a synergic job,
+    /// a voltage or a current; none negative), gas times ≥ 0, and a `weld` prefix whose
+    /// numbered names fit RAPID and clash with no other name; with `data: controller` neither
+    /// `arc` nor `seam_value` (the controller's data hold them).
+    fn validate_weld(&self) -> Result<(), FieldError> {
+        let WeldMode::Arc {
+            data,
+            seam,
+            weld,
+            arc,
+            seam_value,
+        } = &self.weld
+        else {
+            return Ok(());
+        };
+        if *data == WeldDataSource::Controller {
+            for (field, given) in [
+                ("weld.arc", arc.is_some()),
+                ("weld.seam_value", seam_value.is_some()),
+            ] {
+                if given {
+                    return Err(FieldError::new(
+                        field,
+                        "only with data: program (with data: controller the controller's seamdata and welddata hold these)",
+                    ));
+                }
+            }
+            return Ok(());
+        }
+        let Some(arc) = arc else {
+            return Err(FieldError::new(
+                "weld.arc",
+                "data: program declares the welddata, so it needs the power source's settings: arc: {sched: JOB} for a synergic job, or voltage_v / current_a (or use data: controller)",
+            ));
+        };
+        Allowed::NON_NEGATIVE.check_field("weld.arc.voltage_v", arc.voltage_v, "V")?;
+        Allowed::NON_NEGATIVE.check_field("weld.arc.current_a", arc.current_a, "A")?;
+        Allowed::FINITE.check_field("weld.arc.control", arc.control, "")?;
+        if arc.sched == 0 && arc.voltage_v == 0.0 && arc.current_a == 0.0 {
+            return Err(FieldError::new(
+                "weld.arc",
+                "nothing sets the arc: give sched (the synergic job) or voltage_v / current_a",
+            ));
+        }
+        if let Some(sv) = seam_value {
+            for (field, v) in [
+                ("weld.seam_value.purge_s", sv.purge_s),
+                ("weld.seam_value.preflow_s", sv.preflow_s),
+                ("weld.seam_value.postflow_s", sv.postflow_s),
+            ] {
+                Allowed::NON_NEGATIVE.check_field(field, v, "s")?;
+            }
+        }
+        if weld.len() > MAX_WELD_PREFIX_LEN {
+            return Err(FieldError::new(
+                "weld.weld",
+                format!("{weld:?} is longer than {MAX_WELD_PREFIX_LEN} characters (with data: program it is the prefix of weld1, weld2, …)"),
+            ));
+        }
+        if is_generated_name(&welddata_name(weld, 1)) {
+            return Err(FieldError::new(
+                "weld.weld",
+                format!("{weld:?}: the welddata {} would have the form of a name the emitter declares (pN, vTSN)", welddata_name(weld, 1)),
+            ));
+        }
+        let others = [
+            ("tool.name", &self.tool.name),
+            ("wobj.name", &self.wobj.name),
+            ("zone.name", &self.zone.name),
+            ("weld.seam", seam),
+        ];
+        if let Some((field, name)) = others.iter().find(|(_, n)| is_welddata_name(weld, n)) {
+            return Err(FieldError::new(
+                *field,
+                format!("{name:?} has the form of a welddata name the program declares ({weld}1, {weld}2, …)"),
+            ));
         }
         Ok(())
     }
@@ -732,6 +921,108 @@ mod tests {
                 "{to}: {e}"
             );
         }
+    }
+
+    #[test]
+    fn weld_data_source_is_validated_by_field() {
+        let base = yaml("abb-irb2600-waam");
+        let p = crate::MachineProfile::from_yaml_str(&base, "m.yaml").unwrap();
+        match &p.rapid.as_ref().unwrap().weld {
+            WeldMode::Arc {
+                data, arc, weld, ..
+            } => {
+                assert_eq!(*data, WeldDataSource::Program);
+                assert_eq!(arc.as_ref().unwrap().sched, 1);
+                assert_eq!(welddata_name(weld, 3), "weldWAAM3");
+            }
+            w => panic!("{w:?}"),
+        }
+        // Controller-side data by name: no arc, no seam_value.
+        let arc_block =
+            "    arc:\n      sched: 1\n      mode: 0\n      voltage_v: 0.0\n      current_a: 0.0\n";
+        let seam_block =
+            "    seam_value:\n      purge_s: 0.2\n      preflow_s: 0.05\n      postflow_s: 0.05\n";
+        assert!(base.contains(arc_block) && base.contains(seam_block));
+        let controller = base
+            .replace("data: program", "data: controller")
+            .replace(arc_block, "")
+            .replace(seam_block, "");
+        let p = crate::MachineProfile::from_yaml_str(&controller, "m.yaml").unwrap();
+        assert!(matches!(
+            &p.rapid.as_ref().unwrap().weld,
+            WeldMode::Arc {
+                data: WeldDataSource::Controller,
+                arc: None,
+                ..
+            }
+        ));
+        // `data` absent: program, which needs arc.
+        let no_data = base.replace("    data: program\n", "");
+        assert!(crate::MachineProfile::from_yaml_str(&no_data, "m.yaml").is_ok());
+        for (text, field) in [
+            (base.replace(arc_block, ""), "rapid.weld.arc"),
+            (
+                base.replace("data: program", "data: controller"),
+                "rapid.weld.arc",
+            ),
+            (
+                base.replace("data: program", "data: controller")
+                    .replace(arc_block, ""),
+                "rapid.weld.seam_value",
+            ),
+            (base.replace("sched: 1", "sched: 0"), "rapid.weld.arc"),
+            (
+                base.replace("voltage_v: 0.0", "voltage_v: -1.0"),
+                "rapid.weld.arc.voltage_v",
+            ),
+            (
+                base.replace("current_a: 0.0", "current_a: .nan"),
+                "rapid.weld.arc.current_a",
+            ),
+            (
+                base.replace("preflow_s: 0.05", "preflow_s: -0.1"),
+                "rapid.weld.seam_value.preflow_s",
+            ),
+            (
+                base.replace("weld: weldWAAM", &format!("weld: w{}", "x".repeat(27))),
+                "rapid.weld.weld",
+            ),
+            (
+                base.replace("weld: weldWAAM", "weld: vTS"),
+                "rapid.weld.weld",
+            ),
+            (base.replace("weld: weldWAAM", "weld: p"), "rapid.weld.weld"),
+            (
+                base.replace("name: tWAAM", "name: weldWAAM7"),
+                "rapid.tool.name",
+            ),
+            (
+                base.replace("seam: seamWAAM", "seam: WELDwaam12"),
+                "rapid.weld.seam",
+            ),
+        ] {
+            assert_ne!(text, base, "{field}");
+            assert_eq!(field_of(&text), field, "{text}");
+        }
+        // A synergic job is not needed when the voltage is given.
+        let manual = base
+            .replace("sched: 1", "sched: 0")
+            .replace("voltage_v: 0.0", "voltage_v: 19.5");
+        assert!(crate::MachineProfile::from_yaml_str(&manual, "m.yaml").is_ok());
+        // Unknown data sources and keys are parse errors naming them.
+        for (from, to, key) in [
+            ("data: program", "data: module", "module"),
+            ("sched: 1", "shed: 1", "shed"),
+        ] {
+            let e = crate::MachineProfile::from_yaml_str(&base.replace(from, to), "m.yaml")
+                .unwrap_err();
+            assert!(e.to_string().contains(key), "{e}");
+        }
+        assert!(is_welddata_name("weldWAAM", "WELDWAAM12"));
+        assert!(
+            !is_welddata_name("weldWAAM", "weldWAAM")
+                && !is_welddata_name("weldWAAM", "weldWAAMx1")
+        );
     }
 
     #[test]

@@ -280,6 +280,118 @@ async fn malformed_module_is_rejected_with_the_controller_code() {
     }
 }
 
+/// A simulator whose controller declares `extra` besides ABB's predefined data, and a client
+/// for it.
+async fn controller_with(extra: &[&str]) -> (RwsSim, RwsClient, tempfile::TempDir) {
+    let mut sim_cfg = SimConfig::new(RwsVersion::Rw6, USER, PASSWORD);
+    sim_cfg
+        .controller_data
+        .extend(extra.iter().map(|n| (*n).to_owned()));
+    let sim = RwsSim::start(sim_cfg).await.unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let cred = write_credentials(dir.path(), &format!("{USER}:{PASSWORD}\n"));
+    let cfg = ControllerConfig::loopback(
+        "sim",
+        sim.addr().port(),
+        RwsVersion::Rw6,
+        CredentialsSource::File(cred),
+    );
+    let rws = RwsClient::connect(cfg).await.unwrap();
+    (sim, rws, dir)
+}
+
+/// The WAAM profile with `weld: {data: controller}`: the program names seamWAAM and weldWAAM.
+fn controller_weld_data_profile() -> MachineProfile {
+    use cell_profiles::rapid::{WeldDataSource, WeldMode};
+    let mut p = MachineProfile::resolve("abb-irb2600-waam").unwrap();
+    if let WeldMode::Arc {
+        data,
+        arc,
+        seam_value,
+        ..
+    } = &mut p.rapid.as_mut().unwrap().weld
+    {
+        *data = WeldDataSource::Controller;
+        *arc = None;
+        *seam_value = None;
+    }
+    p.validate("abb-irb2600-waam (data: controller)").unwrap();
+    p
+}
+
+/// Issue 20: the shipped WAAM profile's program declares its own seamdata and welddata and
+/// loads and runs on a controller that has only ABB's predefined data. A `data: controller`
+/// program names data the controller must have: without them the load fails with a
+/// reference error naming the module, line and name; with them it loads and runs.
+#[tokio::test]
+async fn weld_data_come_with_the_program_or_must_be_on_the_controller() {
+    let (sim, rws, _dir) = controller_with(&[]).await;
+    let files = emitted("abb-irb2600-waam", &wall(), "self");
+    let main = String::from_utf8_lossy(&files[0].1).into_owned();
+    assert!(
+        main.contains("LOCAL PERS seamdata seamWAAM := ")
+            && main.contains("LOCAL PERS welddata weldWAAM1 := [8,8,")
+            && main.contains("LOCAL PERS welddata weldWAAM2 := [10,10,"),
+        "{main}"
+    );
+    rws.install_program(as_refs(&files)).await.unwrap();
+    assert_eq!(sim.modules()[0].name, "WAAM_self");
+    rws.set_pp_to_main().await.unwrap();
+    rws.start().await.unwrap();
+    let end = rws.wait_until_stopped(POLL, PATIENCE).await.unwrap();
+    assert_eq!(end.state, ExecState::Stopped);
+
+    // Controller-side data on a controller without them: refused, the loaded program kept.
+    let controller_files: Vec<(String, Vec<u8>)> =
+        rapid::emit(&wall(), &controller_weld_data_profile(), "ctrl")
+            .unwrap()
+            .into_iter()
+            .map(|f| (f.name, f.text.into_bytes()))
+            .collect();
+    let text = String::from_utf8_lossy(&controller_files[0].1).into_owned();
+    assert!(
+        !text.contains("seamdata") && !text.contains("welddata"),
+        "{text}"
+    );
+    let first_weld_line = 1 + text
+        .lines()
+        .position(|l| l.trim_start().starts_with("ArcLStart"))
+        .unwrap();
+    let e = rws
+        .install_program(as_refs(&controller_files))
+        .await
+        .unwrap_err();
+    assert_eq!(e.abb_code(), Some(codes::RAPID_SYNTAX_ERROR), "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&format!(
+            "Reference error in HOME/cellsuite/WAAM_ctrl.mod: module WAAM_ctrl, line {first_weld_line}: `seamWAAM` is not declared"
+        )),
+        "{msg}"
+    );
+    assert_eq!(sim.modules()[0].name, "WAAM_self", "the old program stays");
+    assert!(!sim.mastership_held());
+
+    // A controller with only the seamdata: the welddata is named.
+    let (_sim, rws, _dir) = controller_with(&["seamWAAM"]).await;
+    let e = rws
+        .install_program(as_refs(&controller_files))
+        .await
+        .unwrap_err();
+    assert!(e.to_string().contains("`weldWAAM` is not declared"), "{e}");
+
+    // A controller that declares both: loads and runs.
+    let (sim, rws, _dir) = controller_with(&["seamWAAM", "weldWAAM"]).await;
+    rws.install_program(as_refs(&controller_files))
+        .await
+        .unwrap();
+    assert_eq!(sim.modules()[0].name, "WAAM_ctrl");
+    rws.set_pp_to_main().await.unwrap();
+    rws.start().await.unwrap();
+    let end = rws.wait_until_stopped(POLL, PATIENCE).await.unwrap();
+    assert_eq!(end.state, ExecState::Stopped);
+}
+
 #[tokio::test]
 async fn bad_program_input_is_refused_before_any_request() {
     let (sim, cfg, _dir) = setup(RwsVersion::Rw6).await;

@@ -14,7 +14,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cell_mesh::{Mesh, MeshReport, SliceParams, StlFormat};
+use cell_mesh::{Mesh, MeshReport, StlFormat};
 use cell_waam::cost::{
     post_toolpath_cost, solid_machining_cost, PartVolumes, PostToolpathCost, SolidMachiningCost,
 };
@@ -87,6 +87,27 @@ pub enum JobError {
     /// The process profile cannot be read or is invalid (file, line, field).
     #[error(transparent)]
     Process(#[from] cell_waam::ProcessError),
+    /// The mesh is lower than half a layer: there is nothing to deposit.
+    #[error(
+        "{file}: nothing to deposit: the part is {height_mm:.3} mm high, less than half a layer \
+         ({layer_height_mm} mm); STL coordinates are taken as mm"
+    )]
+    NothingToDeposit {
+        /// The STL.
+        file: String,
+        /// The part's height, mm.
+        height_mm: f64,
+        /// The layer height, mm.
+        layer_height_mm: f64,
+    },
+    /// Material of the part that no bead covers (the message lists the layers and regions).
+    #[error("{file}: the beads leave part of the mesh uncovered: {regions}")]
+    Uncovered {
+        /// The STL.
+        file: String,
+        /// `layer k (z mm): x0..x1 × y0..y1 mm, area mm²`, joined by `; `.
+        regions: String,
+    },
     /// A layer could not be planned.
     #[error("{file}: {error}")]
     Toolpath {
@@ -352,6 +373,19 @@ pub struct SliceReport {
     pub deposited_volume_mm3: f64,
     /// Deposited mass V_d·ρ, kg.
     pub deposited_mass_kg: f64,
+    /// V_f, the part's (mesh's) volume, mm³.
+    pub part_volume_mm3: f64,
+    /// The process's machining allowance per side, mm.
+    pub machining_allowance_mm: f64,
+    /// The least allowance measured over the part's surface, mm: per layer, the signed distance
+    /// from the part region's boundary to the deposit's (beads as their width swept along the
+    /// path), and the top (last bead's top minus the part's top); the part's bottom sits on the
+    /// plate. Negative: part left uncovered.
+    pub min_allowance_mm: f64,
+    /// Where the least allowance occurs (plate frame, mm; x and y NaN for the top).
+    pub min_allowance_at_mm: [f64; 3],
+    /// Material machined away afterwards, V_d − V_f, mm³ (eq. 6 with no substrate).
+    pub machining_volume_mm3: f64,
     /// t_D, arc-on time, s (eq. 18).
     pub deposition_time_s: f64,
     /// Travel moves plus arc starts/stops, s.
@@ -484,12 +518,19 @@ pub fn run_until(
         layers_done: 0,
         layers_total: 0,
     });
-    let mut stack =
-        cell_mesh::slice(&mesh, &SliceParams::new(h)).map_err(|error| JobError::Slice {
+    let (lo, hi) = mesh.bbox();
+    if hi[2] - lo[2] < 0.5 * h {
+        return Err(JobError::NothingToDeposit {
+            file: name.clone(),
+            height_mm: hi[2] - lo[2],
+            layer_height_mm: h,
+        });
+    }
+    let mut stack = crate::slab::deposit_layers(&mesh, h, job.process.machining_allowance_mm)
+        .map_err(|error| JobError::Slice {
             file: name.clone(),
             error,
         })?;
-    let (lo, hi) = mesh.bbox();
     let offset = placement_offset(job.placement, lo, hi);
     for l in &mut stack.layers {
         l.z_mm += offset[2];
@@ -520,19 +561,15 @@ pub fn run_until(
     }
     let total = stack.layers.len();
     check_stop(stop, 0, total)?;
-    if total == 0 {
-        warnings.push(format!(
-            "{name}: no layer: the part is {:.3} mm high, less than half a layer ({h} mm); STL \
-             coordinates are taken as mm",
-            hi[2] - lo[2]
-        ));
-    }
     progress(JobProgress {
         phase: Phase::Plan,
         layers_done: 0,
         layers_total: total,
     });
 
+    // The planner sizes thin-feature beads to be at least one layer high.
+    let mut process = job.process.clone();
+    process.layer_height_mm = h;
     let mut layers: Vec<LayerToolpath> = Vec::with_capacity(total);
     let mut from: Option<[f64; 3]> = None;
     for (done, l) in stack.layers.iter().enumerate() {
@@ -541,7 +578,7 @@ pub fn run_until(
             z_mm: l.z_mm,
             outers_and_holes: l.contours.iter().map(|c| c.points.clone()).collect(),
         };
-        let tp = plan_layer(&polygons, &job.process, from).map_err(|error| JobError::Toolpath {
+        let tp = plan_layer(&polygons, &process, from).map_err(|error| JobError::Toolpath {
             file: name.clone(),
             error,
         })?;
@@ -557,6 +594,7 @@ pub fn run_until(
         check_stop(stop, done + 1, total)?;
     }
 
+    check_covered(&name, &layers)?;
     let report = build_report(
         job, &name, h, offset, &stack, &layers, summary, warnings, t0,
     );
@@ -570,6 +608,72 @@ pub fn run_until(
         layers,
         report,
     })
+}
+
+/// [`JobError::Uncovered`] naming every layer and region no bead covers; also when nothing at
+/// all is deposited.
+fn check_covered(name: &str, layers: &[LayerToolpath]) -> Result<(), JobError> {
+    let mut regions: Vec<String> = Vec::new();
+    for l in layers {
+        for r in &l.uncovered {
+            regions.push(format!(
+                "layer {} (z {:.2} mm): x {:.1}..{:.1} × y {:.1}..{:.1} mm, {:.1} mm²",
+                l.index,
+                l.z_mm,
+                r.bbox_min_mm[0],
+                r.bbox_max_mm[0],
+                r.bbox_min_mm[1],
+                r.bbox_max_mm[1],
+                r.area_mm2
+            ));
+        }
+    }
+    if layers.iter().all(|l| l.arc_starts == 0) {
+        regions.push(format!("no bead in any of the {} layers", layers.len()));
+    }
+    if regions.is_empty() {
+        Ok(())
+    } else {
+        Err(JobError::Uncovered {
+            file: name.into(),
+            regions: regions.join("; "),
+        })
+    }
+}
+
+/// Boundary sample spacing of the allowance measure (mm).
+const ALLOWANCE_STEP_MM: f64 = 0.5;
+
+/// The least allowance over the layers (seed-free; issue 20): the side allowance of every
+/// layer ([`cell_waam::allowance::layer_allowance`] against the layer's region) and the top
+/// one (the last layer's top above the part's top). Returns (value, where, layer index or
+/// `None` for the top).
+fn min_allowance(
+    stack: &cell_mesh::LayerStack,
+    layers: &[LayerToolpath],
+    part_height_mm: f64,
+    tol_mm: f64,
+) -> (f64, [f64; 3]) {
+    let h = stack.layer_height_mm;
+    let top = layers.len() as f64 * h - part_height_mm;
+    let mut best = (
+        top,
+        [
+            f64::NAN,
+            f64::NAN,
+            stack.first_z_mm - 0.5 * h + part_height_mm,
+        ],
+    );
+    for (s, t) in stack.layers.iter().zip(layers) {
+        let rings: Vec<Vec<[f64; 2]>> = s.contours.iter().map(|c| c.points.clone()).collect();
+        if let Some(a) = cell_waam::allowance::layer_allowance(&rings, t, ALLOWANCE_STEP_MM, tol_mm)
+        {
+            if a.min_mm < best.0 {
+                best = (a.min_mm, [a.at_mm[0], a.at_mm[1], s.z_mm]);
+            }
+        }
+    }
+    best
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -642,6 +746,21 @@ fn build_report(
     // `+ 0.0`: an empty f64 sum is −0.0, which reports would print as "-0".
     let deposited_volume_mm3: f64 =
         layers.iter().map(|l| l.deposited_volume_mm3).sum::<f64>() + 0.0;
+    let part_height = mesh.bbox_max_mm[2] - mesh.bbox_min_mm[2];
+    let (min_allowance_mm, min_allowance_at_mm) =
+        min_allowance(stack, layers, part_height, job.process.arc_tolerance_mm);
+    let low_beads = layers
+        .iter()
+        .flat_map(|l| &l.segments)
+        .flat_map(|s| &s.points)
+        .filter(|p| p.arc_on && p.bead_height_mm < h - 1e-9)
+        .count();
+    if low_beads > 0 {
+        warnings.push(format!(
+            "{name}: {low_beads} bead points are lower than the {h} mm layer (eq. 28): the \
+             layers will not stack to the planned height"
+        ));
+    }
     SliceReport {
         source: name.into(),
         process: job.process_name.clone(),
@@ -657,6 +776,11 @@ fn build_report(
         bead_width_range_mm: if wmax > 0.0 { [wmin, wmax] } else { [0.0, 0.0] },
         deposited_volume_mm3,
         deposited_mass_kg: deposited_volume_mm3 * 1e-9 * rates.density_kg_m3,
+        part_volume_mm3: mesh.volume_mm3,
+        machining_allowance_mm: job.process.machining_allowance_mm,
+        min_allowance_mm,
+        min_allowance_at_mm,
+        machining_volume_mm3: deposited_volume_mm3 - mesh.volume_mm3,
         deposition_time_s,
         travel_time_s,
         dwell_time_s,
@@ -720,28 +844,29 @@ mod tests {
                 e,
                 JobError::Cancelled {
                     layers_done: 3,
-                    layers_total: 12
+                    layers_total: 14
                 }
             ),
             "stops after the third layer: {e}"
         );
-        assert_eq!(e.to_string(), "cancelled after 3 of 12 layers");
+        assert_eq!(e.to_string(), "cancelled after 3 of 14 layers");
     }
 
     #[test]
     fn a_cube_slices_into_layers_with_monotone_progress_and_consistent_totals() {
         let mut seen = Vec::new();
         let out = run(&job("20mm-xyz-cube.stl"), |p| seen.push(p)).unwrap();
-        // 20 mm / 1.6 mm mid-layer planes: z_min + 0.8 + 1.6 k < z_max → k = 0..=11.
-        assert_eq!(out.report.layers, 12, "20 mm cube at 1.6 mm layers");
-        assert_eq!(out.layers.len(), 12);
+        // Issue 20: the last bead's top is the allowance above the part's: ⌈(20 + 1)/1.6⌉ = 14
+        // layers (12 reached only 19.2 mm).
+        assert_eq!(out.report.layers, 14, "20 mm cube at 1.6 mm layers");
+        assert_eq!(out.layers.len(), 14);
         assert!(seen
             .windows(2)
             .all(|w| w[0].layers_done <= w[1].layers_done));
         assert_eq!(seen.last().unwrap().phase, Phase::Done);
         assert_eq!(
             seen.iter().filter(|p| p.phase == Phase::Plan).count(),
-            13,
+            15,
             "one report before planning and one per layer"
         );
         let r = &out.report;
@@ -791,6 +916,174 @@ mod tests {
         j.layer_height_mm = Some(-1.0);
         let e = run(&j, |_| {}).unwrap_err().to_string();
         assert!(e.contains("layer_height_mm"), "{e}");
+    }
+
+    /// A binary STL of `tris` (mm) at `path`.
+    fn write_stl(path: &Path, tris: &[[[f64; 3]; 3]]) {
+        let mut b = vec![0u8; 80];
+        b.extend((tris.len() as u32).to_le_bytes());
+        for t in tris {
+            b.extend([0u8; 12]);
+            for v in t {
+                for c in v {
+                    b.extend((*c as f32).to_le_bytes());
+                }
+            }
+            b.extend([0u8; 2]);
+        }
+        std::fs::write(path, b).unwrap();
+    }
+
+    /// The prism between the CCW rings `outer` and `inner` (same count; `inner` may be a single
+    /// repeated point for a solid), from z = 0 to `h`, outward normals.
+    fn prism(outer: &[[f64; 2]], inner: &[[f64; 2]], h: f64) -> Vec<[[f64; 3]; 3]> {
+        let v = |p: [f64; 2], z: f64| [p[0], p[1], z];
+        let mut t = Vec::new();
+        let n = outer.len();
+        for i in 0..n {
+            let (p, q) = (outer[i], outer[(i + 1) % n]);
+            let (r, s) = (inner[i], inner[(i + 1) % n]);
+            t.push([v(p, 0.0), v(q, 0.0), v(q, h)]);
+            t.push([v(p, 0.0), v(q, h), v(p, h)]);
+            if r != s {
+                t.push([v(s, 0.0), v(r, 0.0), v(r, h)]);
+                t.push([v(s, 0.0), v(r, h), v(s, h)]);
+            }
+            // Top and bottom: the band between the rings.
+            t.push([v(p, h), v(q, h), v(s, h)]);
+            t.push([v(p, h), v(s, h), v(r, h)]);
+            t.push([v(q, 0.0), v(p, 0.0), v(r, 0.0)]);
+            t.push([v(q, 0.0), v(r, 0.0), v(s, 0.0)]);
+        }
+        t.retain(|[a, b, c]| a != b && b != c && c != a);
+        t
+    }
+
+    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<[f64; 2]> {
+        vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
+    }
+
+    /// Runs `file` (a path) with the built-in profile and checks issue 20's coverage: more metal
+    /// than the part, the least allowance at least the profile's minus 0.2 mm, a positive
+    /// machining term and no coverage warning.
+    fn covered(file: PathBuf) -> SliceReport {
+        let mut j = job("20mm-xyz-cube.stl");
+        j.part = PartSource::Stl(file.clone());
+        let r = run(&j, |_| {}).unwrap().report;
+        let a = r.machining_allowance_mm;
+        assert_eq!(a, 1.0, "the built-in allowance");
+        assert!(
+            r.deposited_volume_mm3 > r.part_volume_mm3,
+            "{file:?}: {} mm³ deposited for {} mm³",
+            r.deposited_volume_mm3,
+            r.part_volume_mm3
+        );
+        assert!(
+            r.min_allowance_mm >= a - 0.2,
+            "{file:?}: least allowance {} mm at {:?}",
+            r.min_allowance_mm,
+            r.min_allowance_at_mm
+        );
+        assert!(r.cost.machining_sek > 0.0 && r.machining_volume_mm3 > 0.0);
+        assert!(
+            r.warnings.iter().all(|w| !w.contains("do not cover")),
+            "{:?}",
+            r.warnings
+        );
+        r
+    }
+
+    #[test]
+    fn shipped_parts_are_covered_with_the_allowance() {
+        let cube = covered(data("20mm-xyz-cube.stl"));
+        // The top too: 14 layers of 1.6 mm reach 22.4 mm over a 20 mm part.
+        assert!(cube.layers as f64 * 1.6 >= 20.0 + 1.0);
+        let plate = covered(data("plate_holes.STL"));
+        assert_eq!(plate.holes % plate.layers, 0, "every layer keeps its holes");
+        assert!(plate.holes > 0);
+        // idler_riser.STL is drawn in inches (2.58 × 2.95 × 0.625): in mm it is lower than half
+        // a layer (an error, below); scaled by 25.4 it is a 65 × 75 × 15.9 mm riser.
+        let dir = tempfile::tempdir().unwrap();
+        let mesh = Mesh::load_stl(data("idler_riser.STL")).unwrap();
+        let v = mesh.vertices();
+        let tris: Vec<[[f64; 3]; 3]> = mesh
+            .triangles()
+            .iter()
+            .map(|t| t.map(|i| v[i as usize].map(|c| 25.4 * c)))
+            .collect();
+        let riser = dir.path().join("idler_riser_mm.stl");
+        write_stl(&riser, &tris);
+        covered(riser);
+        let e = run(&job("idler_riser.STL"), |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("idler_riser.STL") && e.contains("nothing to deposit"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_thin_walled_box_and_a_pin_are_deposited_and_covered() {
+        let dir = tempfile::tempdir().unwrap();
+        // A 40 × 30 mm box with 3 mm walls, 25 mm high: every layer one 3 mm ring.
+        let tube = dir.path().join("tube.stl");
+        write_stl(
+            &tube,
+            &prism(
+                &rect(0.0, 0.0, 40.0, 30.0),
+                &rect(3.0, 3.0, 37.0, 27.0),
+                25.0,
+            ),
+        );
+        let r = covered(tube);
+        assert_eq!(r.layers, 17, "⌈(25 + 1)/1.6⌉");
+        assert_eq!(r.arc_starts, r.layers, "one closed mid-wall bead per layer");
+        // A 5 mm pin (32-gon), 20 mm high: a column of one small circle per layer.
+        let pin = dir.path().join("pin.stl");
+        let ring: Vec<[f64; 2]> = (0..32)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / 32.0;
+                [2.5 * t.cos(), 2.5 * t.sin()]
+            })
+            .collect();
+        write_stl(&pin, &prism(&ring, &vec![[0.0, 0.0]; 32], 20.0));
+        let mut j = job("20mm-xyz-cube.stl");
+        j.part = PartSource::Stl(pin.clone());
+        let out = run(&j, |_| {}).unwrap();
+        let r = covered(pin);
+        assert_eq!(r.arc_starts, r.layers, "one circle per layer");
+        for p in out
+            .layers
+            .iter()
+            .flat_map(|l| &l.segments)
+            .flat_map(|s| &s.points)
+        {
+            assert!(!p.arc_on || p.bead_height_mm >= 1.6, "beads stack: {p:?}");
+            assert!(
+                !p.arc_on || p.bead_width_mm < 9.11,
+                "the narrowest bead that stacks"
+            );
+        }
+    }
+
+    #[test]
+    fn a_part_lower_than_half_a_layer_is_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let flat = dir.path().join("flat.stl");
+        write_stl(
+            &flat,
+            &prism(&rect(0.0, 0.0, 10.0, 10.0), &[[5.0, 5.0]; 4], 0.5),
+        );
+        let mut j = job("20mm-xyz-cube.stl");
+        j.part = PartSource::Stl(flat);
+        let e = run(&j, |_| {}).unwrap_err();
+        assert!(matches!(e, JobError::NothingToDeposit { .. }), "{e}");
+        let e = e.to_string();
+        assert!(
+            e.contains("flat.stl") && e.contains("nothing to deposit"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -125,7 +125,12 @@ pub fn pre_toolpath_cost(rates: &CostRates, volumes: &PartVolumes) -> PreToolpat
     }
 }
 
-/// (t_m^AM in h, C_m^AM in SEK) for deposited volume `deposited_m3` (seed 004 eq. 5–6).
+/// (t_m^AM in h, C_m^AM in SEK) for deposited volume `deposited_m3` (seed 004 eq. 5–6):
+/// `t_m^AM = (V_d + V_s − V_f)·ρ / MRR`, `C_m^AM = t_m^AM·HR_M`. The removed volume is what the
+/// deposit holds beyond the finished part: positive when the beads enclose the part with a
+/// machining allowance, as the slicer plans them (issue 20); a V_d below V_f (beads that miss
+/// part of the net shape) would make it negative, which is why the slice job refuses to leave
+/// material uncovered.
 fn machining_after_waam(rates: &CostRates, volumes: &PartVolumes, deposited_m3: f64) -> (f64, f64) {
     let removed_kg =
         (deposited_m3 + volumes.substrate_m3 - volumes.finished_m3) * rates.density_kg_m3;

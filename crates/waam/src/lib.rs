@@ -11,6 +11,7 @@
 //!   infill, the width-driven mid-wall mode, start spreading, dwell.
 //! - [`rows`]: the thesis's toolpath rows `[X Y Z E C N LW/2 h k]` (eq. 7, eq. 12–13), the
 //!   segment chainer (§4.3) and a CSV writer.
+//! - [`allowance`]: the machining allowance a planned layer leaves around the part's section.
 //! - [`cost`]: cost before and after the toolpath (eq. 1–6, 15–24, Chart 3).
 //! - [`stock`]: the deposited beads as boxes in a binary STL for CAM (§4.8).
 //! - [`process`]: the process profile (YAML, `config/processes/waam.yaml`).
@@ -37,6 +38,7 @@
 //! cell_waam::stock::write_stock_stl(&mut stl, &cell_waam::stock::bead_boxes(&layers)).unwrap();
 //! ```
 
+pub mod allowance;
 pub mod bead;
 pub mod cost;
 pub mod process;
@@ -44,6 +46,7 @@ pub mod rows;
 pub mod stock;
 pub mod to_msg;
 pub mod toolpath;
+pub mod torch;
 
 pub use process::{ProcessError, WaamProcess, WidthMode};
 pub use toolpath::{

@@ -10,6 +10,7 @@ use thiserror::Error;
 
 use crate::bead;
 use crate::cost::CostRates;
+use crate::torch::TorchPose;
 
 /// Errors loading or checking a process profile.
 #[derive(Debug, Error)]
@@ -106,6 +107,13 @@ pub struct WaamProcess {
     /// Longest spacing of wall-width samples along a wall-driven path (mm, ≥ 0.05); the thesis
     /// inserts points where the wall geometry changes (Fig. 15). Default 2.
     pub wall_sample_mm: f64,
+    /// Machining allowance per side (mm, ≥ 0): the deposit must contain the part grown by this
+    /// much (walls outwards, holes inwards, tops upwards), since WAAM is near-net and the part is
+    /// machined to its net shape afterwards (seed 004 §1, eq. 5–6). Default 1.0.
+    pub machining_allowance_mm: f64,
+    /// Torch pose: lead and work angles, contact-tip-to-work distance ([`TorchPose`];
+    /// applied by [`crate::to_msg::toolpath_msg_for`]). Default upright, TCP at the wire tip.
+    pub torch: TorchPose,
     /// Cost rates (seed 004 Chart 3).
     pub cost: CostRates,
 }
@@ -133,6 +141,8 @@ impl Default for WaamProcess {
             dwell_s: 0.0,
             arc_tolerance_mm: 0.05,
             wall_sample_mm: 2.0,
+            machining_allowance_mm: 1.0,
+            torch: TorchPose::default(),
             cost: CostRates::default(),
         }
     }
@@ -203,6 +213,7 @@ impl WaamProcess {
             ("travel_lift_mm", self.travel_lift_mm, "mm"),
             ("arc_start_stop_s", self.arc_start_stop_s, "s"),
             ("dwell_s", self.dwell_s, "s"),
+            ("machining_allowance_mm", self.machining_allowance_mm, "mm"),
         ] {
             check(field, v, Allowed::NON_NEGATIVE, unit)?;
         }
@@ -230,6 +241,9 @@ impl WaamProcess {
                 "width_min_mm",
                 format!("[{lo}, {hi}] mm: width limits must satisfy 0 < min <= max").into(),
             ));
+        }
+        if let Some((field, reason)) = self.torch.problem() {
+            return Err(invalid(field, reason.into()));
         }
         let r = &self.cost;
         for (field, v, unit) in [

@@ -52,27 +52,36 @@ fn perimeter_of_a_square_runs_on_the_inset_square() {
         ..WaamProcess::default()
     };
     let w = p.fixed_width_mm();
+    let a = p.machining_allowance_mm;
     let tp = plan_layer(&layer(0, vec![square(0.0, 0.0, 100.0)]), &p, None).unwrap();
     assert_eq!(tp.segments.len(), 1);
     let s = &tp.segments[0];
     assert_eq!(s.kind, SegmentKind::Deposit);
     assert_eq!(s.role, SegmentRole::Perimeter);
-    let (lo, hi) = (w / 2.0, 100.0 - w / 2.0);
+    // Issue 20: the bead's outer edge lies on the square grown by the allowance, so the loop
+    // runs on the square inset by w/2 − a, and each corner moves out along the diagonal until
+    // it is w/2 − a from the square's corner (its disk then reaches the corner plus a).
+    let c = (w / 2.0 - a) / 2f64.sqrt();
+    let corners = [
+        [c, c],
+        [100.0 - c, c],
+        [100.0 - c, 100.0 - c],
+        [c, 100.0 - c],
+    ];
+    assert_eq!(s.points.len(), 5, "4 corners, closed");
     for q in &s.points {
-        let on_edge = [q.x_mm - lo, q.x_mm - hi, q.y_mm - lo, q.y_mm - hi]
+        let near = corners
             .iter()
-            .any(|d| d.abs() < 1e-9);
-        assert!(on_edge, "({}, {}) not on the inset square", q.x_mm, q.y_mm);
+            .any(|k| geom::dist([q.x_mm, q.y_mm], *k) < 1e-3);
+        assert!(near, "({}, {}) is not a pushed corner", q.x_mm, q.y_mm);
         assert!(q.arc_on && (q.bead_width_mm - w).abs() < 1e-12);
     }
-    assert!((s.length_mm() - 4.0 * (hi - lo)).abs() < 1e-9);
+    assert!((s.length_mm() - 4.0 * (100.0 - 2.0 * c)).abs() < 1e-2);
     let first = s.points[0];
     let last = s.points.last().unwrap();
     assert!((first.x_mm - last.x_mm).abs() < 1e-12 && (first.y_mm - last.y_mm).abs() < 1e-12);
-    assert!(
-        geom::dist([first.x_mm, first.y_mm], [lo, lo]) < 1e-9,
-        "layer 0 starts at the lowest-left corner"
-    );
+    // Without infill the inside stays uncovered, and the layer says so.
+    assert_eq!(tp.uncovered.len(), 1, "{:?}", tp.uncovered);
 }
 
 #[test]
@@ -127,7 +136,9 @@ fn plan_with_hole_keeps_infill_out_of_the_hole() {
         for pt in sample(s) {
             let d = distance_to_rings(pt, std::slice::from_ref(&hole), geom::NORM);
             assert!(
-                !point_in_ring_even_odd(pt, &hole) && d >= 1.5 * w - 0.06,
+                // Issue 20: infill reaches the perimeter's centre line, w/2 − a from the hole.
+                !point_in_ring_even_odd(pt, &hole)
+                    && d >= w / 2.0 - p.machining_allowance_mm - 0.06,
                 "infill point {pt:?} only {d} mm from the hole"
             );
         }
@@ -181,10 +192,17 @@ fn zigzag_of_a_square_is_one_bead() {
         ..WaamProcess::default()
     };
     let tp = plan_layer(&layer(0, vec![square(0.0, 0.0, 100.0)]), &p, None).unwrap();
-    assert_eq!(tp.arc_starts, 1, "a convex region is filled in one zig-zag");
+    let infill: Vec<_> = tp
+        .segments
+        .iter()
+        .filter(|s| s.role == SegmentRole::Infill)
+        .collect();
+    assert_eq!(infill.len(), 1, "a convex region is filled in one zig-zag");
     let w = p.fixed_width_mm();
-    let lines = ((100.0 - w) / w).floor() as usize + 1;
-    assert_eq!(tp.segments[0].points.len(), 2 * lines);
+    // Issue 20: over the square grown by the allowance, inset by half a bead.
+    let side = 100.0 + 2.0 * p.machining_allowance_mm;
+    let lines = ((side - w) / w).floor() as usize + 1;
+    assert_eq!(infill[0].points.len(), 2 * lines);
 }
 
 #[test]
@@ -293,14 +311,16 @@ fn wall_driven_width_is_measured_to_the_walls() {
     assert_eq!(tp.arc_starts, 1, "one mid-wall bead, no infill");
     let s = &tp.segments[0];
     assert_eq!(s.role, SegmentRole::WallBead);
-    let ts8 = bead::travel_speed_for_width_mm_s(8.0, p.wire_feed_m_min).unwrap();
+    // Issue 20: the wall grown by the allowance on both sides is what the bead must fill.
+    let wall = 8.0 + 2.0 * p.machining_allowance_mm;
+    let ts8 = bead::travel_speed_for_width_mm_s(wall, p.wire_feed_m_min).unwrap();
     let mut checked = 0;
     for q in &s.points {
         let (x, y) = (q.x_mm, q.y_mm);
         // Away from the corners the wall is 8 mm across the path.
         if (15.0..85.0).contains(&x) || (15.0..85.0).contains(&y) {
             assert!(
-                (q.bead_width_mm - 8.0).abs() < 1e-6,
+                (q.bead_width_mm - wall).abs() < 1e-6,
                 "width {} at ({x}, {y})",
                 q.bead_width_mm
             );
@@ -389,9 +409,23 @@ fn bad_input_is_an_error() {
         ..WaamProcess::default()
     };
     assert!(plan_layer(&layer(0, vec![square(0.0, 0.0, 10.0)]), &bad, None).is_err());
-    // A part narrower than one bead gives an empty layer, not garbage.
+    // Issue 20: a part narrower than one bead is a pin: one circle of the narrowest bead that
+    // stacks (its height at least the layer's), covering it with the allowance.
     let tp = plan_layer(&layer(0, vec![square(0.0, 0.0, 5.0)]), &p, None).unwrap();
-    assert!(tp.segments.is_empty() && tp.deposited_volume_mm3 == 0.0);
+    assert_eq!(tp.arc_starts, 1);
+    assert!(tp.uncovered.is_empty() && tp.deposited_volume_mm3 > 25.0 * p.layer_height_mm);
+    let (lo, _) = cell_waam::toolpath::cover::cover_width_limits_mm(&p);
+    for q in tp
+        .segments
+        .iter()
+        .flat_map(|s| &s.points)
+        .filter(|q| q.arc_on)
+    {
+        assert!((q.bead_width_mm - lo).abs() < 1e-9 && q.bead_height_mm >= p.layer_height_mm);
+    }
+    let a =
+        cell_waam::allowance::layer_allowance(&[square(0.0, 0.0, 5.0)], &tp, 0.25, 0.05).unwrap();
+    assert!(a.min_mm >= p.machining_allowance_mm, "{a:?}");
 }
 
 #[test]
@@ -442,6 +476,7 @@ fn two_perimeters_step_by_one_bead() {
         ..WaamProcess::default()
     };
     let w = p.fixed_width_mm();
+    let a = p.machining_allowance_mm;
     let tp = plan_layer(&layer(0, vec![square(0.0, 0.0, 100.0)]), &p, None).unwrap();
     let perims: Vec<_> = tp
         .segments
@@ -449,20 +484,27 @@ fn two_perimeters_step_by_one_bead() {
         .filter(|s| s.role == SegmentRole::Perimeter)
         .collect();
     assert_eq!(perims.len(), 2);
+    // Issue 20: loops step by one bead from w/2 − a; the outer loop's corners are pushed out
+    // (w/2 − a from the square's corner), the inner loop's are not.
+    let c = (w / 2.0 - a) / 2f64.sqrt();
     for (k, s) in perims.iter().enumerate() {
-        let d = w / 2.0 + k as f64 * w;
+        let d = if k == 0 {
+            c
+        } else {
+            w / 2.0 + k as f64 * w - a
+        };
         let q = s.points[0];
         assert!(
-            geom::dist([q.x_mm, q.y_mm], [d, d]) < 1e-9,
-            "loop {k} at {d} mm"
+            geom::dist([q.x_mm, q.y_mm], [d, d]) < 1e-3,
+            "loop {k} at {d} mm: {q:?}"
         );
     }
     for s in tp.segments.iter().filter(|s| s.role == SegmentRole::Infill) {
         for q in &s.points {
             let m = q.x_mm.min(q.y_mm).min(100.0 - q.x_mm).min(100.0 - q.y_mm);
             assert!(
-                m >= 2.5 * w - 1e-9,
-                "infill {m} mm from the wall, want ≥ 2.5 w"
+                m >= 1.5 * w - a - 1e-3,
+                "infill {m} mm from the wall, want ≥ 1.5 w − a (the inner loop's centre line)"
             );
         }
     }
@@ -507,12 +549,24 @@ fn zigzag_links_never_leave_a_concave_region() {
         };
         let w = p.fixed_width_mm();
         let tp = plan_layer(&layer(0, vec![u.clone()]), &p, None).unwrap();
-        let region = geom::inset(std::slice::from_ref(u), 1.5 * w, p.arc_tolerance_mm);
+        // Issue 20: infill fills the perimeter's centre line: the U grown by the allowance,
+        // then inset by half a bead.
+        use cell_waam::toolpath::region;
+        let tol = p.arc_tolerance_mm;
+        let grown = region::grow(
+            &region::union(std::slice::from_ref(u)),
+            p.machining_allowance_mm,
+            tol,
+        );
+        let region: Vec<Vec<[f64; 2]>> = region::shrink(&grown, w / 2.0, tol)
+            .into_iter()
+            .flatten()
+            .collect();
         let mut n = 0;
         for s in tp.segments.iter().filter(|s| s.role == SegmentRole::Infill) {
             for q in sample(s) {
                 assert!(
-                    point_in_rings_or_near(q, &region, 1e-6, geom::NORM),
+                    point_in_rings_or_near(q, &region, 1e-3, geom::NORM),
                     "angle {angle}: infill point {q:?} outside the inset U"
                 );
                 n += 1;

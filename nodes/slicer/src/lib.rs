@@ -409,6 +409,7 @@ async fn serve_mesh(
     log_stock: bool,
 ) -> anyhow::Result<Served> {
     let job_id = ctx.job_id();
+    let torch = slice_job.process.torch;
     let outcome = ctx
         .run_blocking(move |ctx| {
             job::run_until(&slice_job, |pr| ctx.feedback(feedback(pr)), &|| {
@@ -427,7 +428,13 @@ async fn serve_mesh(
             machine.max_feed_mm_s
         ));
     }
-    let mut toolpath = cell_waam::to_msg::toolpath_msg(&out.layers, job_id, FRAME_ID);
+    let mut toolpath = cell_waam::to_msg::toolpath_msg_for(
+        &out.layers,
+        &torch,
+        out.report.layer_height_mm,
+        job_id,
+        FRAME_ID,
+    );
     toolpath.header.stamp = cell_msgs::builtin_interfaces::Time::now();
     let stack = layer_stack_msg(&out.stack, job_id, FRAME_ID);
     for w in &out.report.warnings {

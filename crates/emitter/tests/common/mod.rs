@@ -236,7 +236,9 @@ pub fn printed_layers() -> Toolpath {
 }
 
 /// A WAAM wall for a robot: two 120 mm beads (layers at z = 2 and 3.6 mm), the torch normal
-/// straight up, 8 mm/s then 10 mm/s (one speeddata each), with an approach and a travel between.
+/// straight up, 8 mm/s then 10 mm/s (one speeddata and one welddata each) at a wire feed of
+/// 5.53 m/min (the power, as `cell_waam::to_msg` writes it), with an approach and a travel
+/// between.
 pub fn waam_wall() -> Toolpath {
     let bead = |z: f64, reverse: bool| {
         let mut pts: Vec<[f64; 3]> = (0..=4)
@@ -255,14 +257,14 @@ pub fn waam_wall() -> Toolpath {
             100.0,
             0.0,
         ),
-        segment(ToolpathSegment::KIND_DEPOSIT, &first, 8.0, 1.0),
+        segment(ToolpathSegment::KIND_DEPOSIT, &first, 8.0, 5.53),
         segment(
             ToolpathSegment::KIND_TRAVEL,
             &[first[4], [220.0, 100.0, 20.0], second[0]],
             100.0,
             0.0,
         ),
-        segment(ToolpathSegment::KIND_DEPOSIT, &second, 10.0, 1.0),
+        segment(ToolpathSegment::KIND_DEPOSIT, &second, 10.0, 5.53),
     ];
     for s in &mut segments {
         s.normals = vec![
@@ -278,7 +280,7 @@ pub fn waam_wall() -> Toolpath {
     Toolpath {
         job_id: "wall".into(),
         process: Toolpath::PROCESS_WAAM,
-        power_unit: Toolpath::POWER_ARC_ON,
+        power_unit: Toolpath::POWER_WIRE_FEED_M_MIN,
         segments,
         ..Default::default()
     }

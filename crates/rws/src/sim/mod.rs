@@ -15,7 +15,10 @@
 //! - **Files.** An in-memory file service under `$HOME` (RWS 1.0) or `HOME` (RWS 2.0):
 //!   directories must exist before files go into them.
 //! - **Program load.** A `.pgf` is read for its `<Module>` entries, every module is checked by
-//!   [`rapid::check_module`] and the program replaces the task's; a failure answers 400 with
+//!   [`rapid::check_module`], the modules together by [`rapid::check_names`] (every data name
+//!   the motion, weld and I/O instructions use is declared in the program, or is
+//!   [`SimConfig::controller_data`] or a signal), and the program replaces the task's; a
+//!   failure answers 400 with
 //!   the controller-style status block: `SYS_CTRL_E_RAPID_SYNTAX_ERROR` (-1073442803) for a
 //!   module, `SYS_CTRL_E_INVALID_PROGRAMFILE` (-1073442814) for the `.pgf`,
 //!   `SYS_CTRL_E_FILE_NOT_FOUND` (-1073438708) for a missing file (codes: [`crate::error::codes`]).
@@ -89,6 +92,11 @@ pub struct SimConfig {
     pub task: String,
     /// Signals as `NETWORK/DEVICE/NAME` and their initial values.
     pub signals: Vec<(String, String)>,
+    /// Data declared on the controller (system modules, predefined data), which a program may
+    /// use without declaring them ([`rapid::check_names`]); the signals count as declared too.
+    /// [`SimConfig::new`]: ABB's predefined data ([`rapid::PREDEFINED_DATA`]); add, e.g., the
+    /// `seamdata` and `welddata` of a cell whose programs use controller-side weld data.
+    pub controller_data: Vec<String>,
     /// Serve HTTPS with this certificate and key instead of plain HTTP.
     #[cfg(feature = "tls")]
     pub tls: Option<SimTls>,
@@ -106,8 +114,8 @@ pub struct SimTls {
 
 impl SimConfig {
     /// A simulator of `version` with one user, the generation's auth scheme, a 200 ms run,
-    /// task `T_ROB1` and signals `Local/DRV_1/doWeld` (0), `Local/DRV_1/diArcEst` (0) and
-    /// `Local/DRV_1/goWireFeed` (0).
+    /// task `T_ROB1`, signals `Local/DRV_1/doWeld` (0), `Local/DRV_1/diArcEst` (0) and
+    /// `Local/DRV_1/goWireFeed` (0), and ABB's predefined data as the controller's data.
     pub fn new(version: RwsVersion, user: &str, password: &str) -> Self {
         SimConfig {
             version,
@@ -122,6 +130,10 @@ impl SimConfig {
             signals: ["doWeld", "diArcEst", "goWireFeed"]
                 .iter()
                 .map(|n| (format!("Local/DRV_1/{n}"), "0".to_owned()))
+                .collect(),
+            controller_data: rapid::PREDEFINED_DATA
+                .iter()
+                .map(|n| (*n).to_owned())
                 .collect(),
             #[cfg(feature = "tls")]
             tls: None,
@@ -1115,6 +1127,51 @@ impl State {
         }
     }
 
+    /// [`rapid::check_names`] over the modules of a program being loaded: a name used but
+    /// declared nowhere is a reference error naming the file, module, line and name. (A
+    /// single module loaded into the task is not checked: it may use data of modules loaded
+    /// after it.)
+    fn check_program_names(&self, modules: &[LoadedModule]) -> Result<(), (i64, String)> {
+        let texts: Vec<(String, String)> = modules
+            .iter()
+            .map(|m| {
+                let bytes = self.files.get(&m.file).map_or(&[][..], Vec::as_slice);
+                // RobotWare 6 reads ISO-8859-1: every byte is a character.
+                let text = std::str::from_utf8(bytes).map_or_else(
+                    |_| bytes.iter().map(|&b| b as char).collect(),
+                    str::to_owned,
+                );
+                (m.name.clone(), text)
+            })
+            .collect();
+        let pairs: Vec<(&str, &str)> = texts
+            .iter()
+            .map(|(n, t)| (n.as_str(), t.as_str()))
+            .collect();
+        let mut known: Vec<&str> = self
+            .cfg
+            .controller_data
+            .iter()
+            .map(String::as_str)
+            .collect();
+        // Signals by their bare name, as RAPID names them.
+        known.extend(
+            self.signals
+                .keys()
+                .map(|k| k.rsplit('/').next().unwrap_or(k)),
+        );
+        rapid::check_names(&pairs, &known).map_err(|u| {
+            let file = modules
+                .iter()
+                .find(|m| m.name == u.module)
+                .map_or("", |m| m.file.as_str());
+            (
+                codes::RAPID_SYNTAX_ERROR,
+                format!("Reference error in {file}: {u}"),
+            )
+        })
+    }
+
     /// The controller's answer to a program edit while RAPID runs, if it runs.
     fn refuse_while_running(&self, c: &Ctx<'_>) -> Option<Response<Full<Bytes>>> {
         self.running().then(|| {
@@ -1198,6 +1255,9 @@ impl State {
                 }
                 Err((code, msg)) => return self.load_failure(c, code, msg),
             }
+        }
+        if let Err((code, msg)) = self.check_program_names(&loaded) {
+            return self.load_failure(c, code, msg);
         }
         self.modules = loaded;
         self.program = Some(key);

@@ -5,7 +5,11 @@
 //! file; `PROC`/`FUNC`/`TRAP` and their `END...` pair up without nesting; `ENDMODULE` closes
 //! the module and nothing follows it; no string literal runs past the end of its line; the
 //! extension suits the generation (`.mod`/`.sys` on RobotWare 6; also `.modx`/`.sysx`, UTF-8,
-//! on RobotWare 7). It is not a RAPID parser: statements inside routines are not checked.
+//! on RobotWare 7). It is not a RAPID parser: statements inside routines are not checked,
+//! except that over a whole program [`check_names`] finds the data names the motion, weld
+//! and I/O instructions use that no module declares and the controller does not have.
+
+use std::collections::HashSet;
 
 use crate::config::RwsVersion;
 
@@ -176,6 +180,207 @@ pub fn outputs_switched_on(text: &str) -> Vec<String> {
     out
 }
 
+/// ABB's predefined data, on every controller (*Technical reference manual - RAPID
+/// Instructions, Functions and Data types*, data types `zonedata`, `speeddata`, `tooldata`,
+/// `wobjdata`, `loaddata`: "predefined data"): the stop point `fine` and zones `z0` … `z200`,
+/// TCP speeds `v5` … `v7000` and `vmax`, external-axis speeds `vrot*` and `vlin*`, `tool0`,
+/// `wobj0`, `load0`. The simulator's default controller-side data.
+pub const PREDEFINED_DATA: &[&str] = &[
+    "fine", "z0", "z1", "z5", "z10", "z15", "z20", "z30", "z40", "z50", "z60", "z80", "z100",
+    "z150", "z200", "v5", "v10", "v20", "v30", "v40", "v50", "v60", "v80", "v100", "v150", "v200",
+    "v300", "v400", "v500", "v600", "v800", "v1000", "v1500", "v2000", "v2500", "v3000", "v4000",
+    "v5000", "v6000", "v7000", "vmax", "vrot1", "vrot2", "vrot5", "vrot10", "vrot20", "vrot50",
+    "vrot100", "vlin10", "vlin20", "vlin50", "vlin100", "vlin200", "vlin500", "vlin1000", "tool0",
+    "wobj0", "load0",
+];
+
+/// Instructions whose arguments [`check_names`] checks: motion, arc welding, I/O and
+/// `TPWrite`.
+const CHECKED_INSTRUCTIONS: &[&str] = &[
+    "MoveL",
+    "MoveJ",
+    "MoveC",
+    "MoveAbsJ",
+    "MoveLDO",
+    "MoveJDO",
+    "ArcLStart",
+    "ArcL",
+    "ArcLEnd",
+    "ArcCStart",
+    "ArcC",
+    "ArcCEnd",
+    "SetDO",
+    "SetAO",
+    "SetGO",
+    "PulseDO",
+    "WaitDI",
+    "WaitDO",
+    "TPWrite",
+];
+
+/// Words that are operators or literals, never data names.
+const NOT_NAMES: &[&str] = &["TRUE", "FALSE", "AND", "OR", "NOT", "XOR", "DIV", "MOD"];
+
+/// A name a program uses without declaring it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Undeclared {
+    /// The module that uses it.
+    pub module: String,
+    /// Line of the use in that module, 1-based.
+    pub line: usize,
+    /// The name as written.
+    pub name: String,
+}
+
+impl std::fmt::Display for Undeclared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "module {}, line {}: `{}` is not declared in the program nor on the controller",
+            self.module, self.line, self.name
+        )
+    }
+}
+
+/// Checks the modules of one program, `(module name, text)`, for names used but declared
+/// nowhere: a real controller loads such a program with reference errors and will not run
+/// it; the simulator refuses the load instead, so the error shows where the program comes
+/// in.
+///
+/// A light check, not name resolution: the names used are the identifiers among the
+/// arguments of the instructions in `CHECKED_INSTRUCTIONS` (not the names of optional
+/// arguments after `\`, components after `.`, or functions before `(`); the declared names
+/// are those of every `CONST`/`PERS`/`VAR` `type name` and every routine in any of the
+/// modules (LOCAL or not), plus `controller_data` (data and I/O signals the controller
+/// has). Names compare ignoring case, as in RAPID.
+///
+/// # Errors
+/// The first undeclared use, in module order.
+pub fn check_names(modules: &[(&str, &str)], controller_data: &[&str]) -> Result<(), Undeclared> {
+    let lexed: Vec<(&str, Vec<(usize, Lexeme)>)> = modules
+        .iter()
+        .map(|(name, text)| (*name, lex(text)))
+        .collect();
+    let mut declared: HashSet<String> = controller_data
+        .iter()
+        .map(|n| n.to_ascii_lowercase())
+        .collect();
+    for (_, toks) in &lexed {
+        for w in toks.windows(3) {
+            let word = |i: usize| match &w[i].1 {
+                Lexeme::Word(s) => Some(s.as_str()),
+                _ => None,
+            };
+            if let (Some(kind), Some(a), Some(b)) = (word(0), word(1), word(2)) {
+                if ["CONST", "PERS", "VAR"]
+                    .iter()
+                    .any(|k| k.eq_ignore_ascii_case(kind))
+                {
+                    declared.insert(b.to_ascii_lowercase());
+                }
+                if ["PROC", "FUNC", "TRAP"]
+                    .iter()
+                    .any(|k| k.eq_ignore_ascii_case(kind))
+                {
+                    declared.insert(a.to_ascii_lowercase());
+                }
+            }
+        }
+    }
+    for (module, toks) in &lexed {
+        let mut i = 0;
+        while i < toks.len() {
+            let head = match &toks[i].1 {
+                Lexeme::Word(s) => s,
+                _ => {
+                    i += 1;
+                    continue;
+                }
+            };
+            let starts_statement =
+                i == 0 || toks[i - 1].1 == Lexeme::Punct(';') || toks[i - 1].0 != toks[i].0;
+            if !(starts_statement
+                && CHECKED_INSTRUCTIONS
+                    .iter()
+                    .any(|c| c.eq_ignore_ascii_case(head)))
+            {
+                i += 1;
+                continue;
+            }
+            let end = toks[i..]
+                .iter()
+                .position(|t| t.1 == Lexeme::Punct(';'))
+                .map_or(toks.len(), |k| i + k);
+            for k in i + 1..end {
+                let (line, Lexeme::Word(name)) = &toks[k] else {
+                    continue;
+                };
+                let before = &toks[k - 1].1;
+                let after = toks.get(k + 1).map(|t| &t.1);
+                let is_name = !name.starts_with(|c: char| c.is_ascii_digit())
+                    && *before != Lexeme::Punct('\\')
+                    && *before != Lexeme::Punct('.')
+                    && after != Some(&Lexeme::Punct('('))
+                    && !NOT_NAMES.iter().any(|n| n.eq_ignore_ascii_case(name));
+                if is_name && !declared.contains(&name.to_ascii_lowercase()) {
+                    return Err(Undeclared {
+                        module: (*module).to_owned(),
+                        line: *line,
+                        name: name.clone(),
+                    });
+                }
+            }
+            i = end + 1;
+        }
+    }
+    Ok(())
+}
+
+/// A word (identifier, keyword or number) or one punctuation character.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Lexeme {
+    Word(String),
+    Punct(char),
+}
+
+/// The module's words and punctuation with their 1-based line; comments dropped, a string
+/// literal as the punctuation `"`. A string left open ends at its line (the structure check
+/// reports it).
+fn lex(text: &str) -> Vec<(usize, Lexeme)> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let n = i + 1;
+        let mut in_string = false;
+        let mut word = String::new();
+        for c in line.chars() {
+            if in_string {
+                in_string = c != '"';
+                continue;
+            }
+            if c.is_alphanumeric() || c == '_' {
+                word.push(c);
+                continue;
+            }
+            if !word.is_empty() {
+                out.push((n, Lexeme::Word(std::mem::take(&mut word))));
+            }
+            match c {
+                '!' => break,
+                '"' => {
+                    in_string = true;
+                    out.push((n, Lexeme::Punct('"')));
+                }
+                c if c.is_whitespace() => {}
+                c => out.push((n, Lexeme::Punct(c))),
+            }
+        }
+        if !word.is_empty() {
+            out.push((n, Lexeme::Word(word)));
+        }
+    }
+    out
+}
+
 /// Identifier-like words with their 1-based line, comments (`!` to end of line) and string
 /// literals removed.
 fn tokenize(text: &str) -> Result<Vec<(usize, String)>, LoadFailure> {
@@ -271,6 +476,61 @@ mod tests {
         }
         let e = check_module("Job1.modx", GOOD.as_bytes(), RwsVersion::Rw6).unwrap_err();
         assert!(e.message.contains("not a module extension"), "{e:?}");
+    }
+
+    const MAIN: &str = "MODULE W\n    PERS tooldata tA := [TRUE,[[0,0,1],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n    LOCAL CONST robtarget p1 := [[1,2,3],[1,0,0,0],[0,0,0,0],[9E+09,9E9,9E9,9E9,9E9,9E9]];\n    LOCAL CONST string s := \"seamX\";\n    PROC main()\n        TPWrite s;\n        ! ArcL p1, v10, seamX, weldX, z1, tA;\n        MoveL Offs(p1,0,0,10), v100, z1, tA\\WObj:=wobj0;\n        MoveL p1, v100, fine, tA\\WObj:=wobj0;\n        W_1_run;\n    ENDPROC\nENDMODULE\n";
+    const PART: &str = "MODULE W_1\n    LOCAL PERS welddata weldX1 := [8,8,[1,0,0,5.53,0,0,0,0,0],[1,0,0,5.53,0,0,0,0,0]];\n    PROC W_1_run()\n        ArcLStart p1, v100, seamX, weldX1, fine, tA\\WObj:=wobj0;\n        ArcLEnd p1, v100, seamX,\n            weldX1, fine, tA\\WObj:=wobjX;\n        SetDO doWeld, 0;\n    ENDPROC\nENDMODULE\n";
+
+    fn predefined() -> Vec<&'static str> {
+        PREDEFINED_DATA.to_vec()
+    }
+
+    #[test]
+    fn names_declared_in_any_module_or_on_the_controller_pass() {
+        let mut known = predefined();
+        known.extend(["seamX", "wobjX", "doWeld"]);
+        check_names(&[("W", MAIN), ("W_1", PART)], &known).unwrap();
+        // Names ignore case; declarations in a later module count too.
+        let upper = PART.replace("seamX", "SEAMX");
+        check_names(&[("W_1", &upper), ("W", MAIN)], &known).unwrap();
+    }
+
+    #[test]
+    fn an_undeclared_name_is_reported_with_module_and_line() {
+        let known = predefined();
+        // seamX is only in a string and a comment in the main module: undeclared.
+        let e = check_names(&[("W", MAIN), ("W_1", PART)], &known).unwrap_err();
+        assert_eq!(
+            e,
+            Undeclared {
+                module: "W_1".into(),
+                line: 4,
+                name: "seamX".into()
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            "module W_1, line 4: `seamX` is not declared in the program nor on the controller"
+        );
+        // A statement across lines: the name on its own line.
+        let mut known = predefined();
+        known.extend(["seamX", "doWeld"]);
+        let e = check_names(&[("W", MAIN), ("W_1", PART)], &known).unwrap_err();
+        assert_eq!((e.line, e.name.as_str()), (6, "wobjX"));
+        // The signal of SetDO, and a predefined zone without the predefined list.
+        known.push("wobjX");
+        let e = check_names(
+            &[("W", MAIN), ("W_1", &PART.replace("doWeld", "doLaser"))],
+            &known,
+        )
+        .unwrap_err();
+        assert_eq!(e.name, "doLaser");
+        let e =
+            check_names(&[("W", MAIN), ("W_1", PART)], &["seamX", "wobjX", "doWeld"]).unwrap_err();
+        assert_eq!(
+            (e.module.as_str(), e.line, e.name.as_str()),
+            ("W", 8, "v100")
+        );
     }
 
     #[test]

@@ -1,13 +1,19 @@
-//! Per-layer WAAM toolpaths: perimeters (inward offsets by half the bead width), zig-zag infill
-//! at an angle that alternates per layer, the thesis's width-driven mid-wall mode, weld starts
-//! spread between layers, and interlayer dwell.
+//! Per-layer WAAM toolpaths that cover the layer's part region grown by the machining allowance
+//! ([`cover`], issue 20): perimeters (the grown region inset by half the bead width, convex
+//! corners pushed out), zig-zag infill at an angle that alternates per layer, thin walls as one
+//! bead along the medial axis and pins as a circle per layer ([`thin`]), what is still left
+//! filled or reported ([`LayerToolpath::uncovered`]); the thesis's width-driven mid-wall mode,
+//! weld starts spread between layers, and interlayer dwell.
 //!
 //! Every per-point value (speed, width, height, wire feed, arc) holds for the piece from that
 //! point to the next, like the rows of seed 004 eq. 7; a segment's last point repeats the values
 //! of the one before.
 
+pub mod cover;
 pub mod geom;
 pub mod infill;
+pub mod region;
+pub mod thin;
 pub mod wall;
 
 use serde::{Deserialize, Serialize};
@@ -169,6 +175,21 @@ pub struct LayerToolpath {
     pub dwell_time_s: f64,
     /// Number of arc starts (deposit segments).
     pub arc_starts: usize,
+    /// Pieces of the part region grown by the allowance that no bead covers (empty when the
+    /// layer is covered; rim slivers thinner than 0.1 mm are not counted).
+    #[serde(default)]
+    pub uncovered: Vec<UncoveredRegion>,
+}
+
+/// A piece of a layer's target region (the part grown by the allowance) no bead covers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UncoveredRegion {
+    /// Bounding box minimum (mm).
+    pub bbox_min_mm: [f64; 2],
+    /// Bounding box maximum (mm).
+    pub bbox_max_mm: [f64; 2],
+    /// Area (mm²).
+    pub area_mm2: f64,
 }
 
 impl LayerToolpath {
@@ -264,6 +285,10 @@ struct Bead {
 /// Plans one layer. `from` is where the torch is before the layer (the previous layer's end),
 /// from which a travel move leads to the first weld start; `None` starts at the first bead.
 ///
+/// The rings are the part's region on this layer (net shape); the beads cover it grown by
+/// `process.machining_allowance_mm` (module [`cover`]). Pieces left uncovered (only possible
+/// with infill or perimeters off) are listed in [`LayerToolpath::uncovered`].
+///
 /// # Errors
 /// An invalid profile, a degenerate ring (fewer than 3 points, non-finite, zero area), a
 /// non-finite `z_mm`.
@@ -279,72 +304,117 @@ pub fn plan_layer(
     let angle = process.infill_angle_deg + process.infill_layer_rotation_deg * layer.index as f64;
     let tol = process.arc_tolerance_mm;
     let wfs = process.wire_feed_m_min;
-    let mut beads: Vec<Bead> = Vec::new();
-    match process.width_mode {
+    let from_xy = from.map(|p| [p[0], p[1]]);
+    let (planned, uncovered) = match process.width_mode {
         WidthMode::Fixed => {
-            let w = process.fixed_width_mm();
-            let ts = process.travel_speed_mm_s;
-            let mut pos = from.map(|p| [p[0], p[1]]);
-            for k in 0..process.perimeters {
-                let mut loops: Vec<Vec<P2>> = geom::inset(rings, w / 2.0 + k as f64 * w, tol)
-                    .iter()
-                    .map(|r| closed_from_arc_length(r, shift, geom::NORM))
-                    .collect();
-                // Nearest start first.
-                while !loops.is_empty() {
-                    let i = match pos {
-                        Some(p) => (0..loops.len())
-                            .min_by(|&a, &b| dist(loops[a][0], p).total_cmp(&dist(loops[b][0], p)))
-                            .unwrap_or(0),
-                        None => 0,
-                    };
-                    let pts = loops.remove(i);
-                    pos = pts.last().copied();
-                    beads.push(Bead {
-                        role: SegmentRole::Perimeter,
-                        width_speed: vec![(w, ts); pts.len()],
-                        pts,
-                    });
-                }
-            }
+            let c = cover::cover_layer(rings, process);
+            let perimeters = c
+                .perimeters
+                .into_iter()
+                .map(|mut b| {
+                    b.pts = closed_from_arc_length(&b.pts[..b.pts.len() - 1], shift, geom::NORM);
+                    b.widths = vec![b.widths[0]; b.pts.len()];
+                    b
+                })
+                .collect();
+            let (mut planned, mut pos) = cover::nearest_first(perimeters, from_xy);
             if process.infill {
-                let region = geom::inset(rings, process.perimeters as f64 * w + w / 2.0, tol);
+                let w = process.fixed_width_mm();
                 let spacing = process.infill_spacing_ratio * w;
                 for pts in infill::zigzag(
-                    &region,
+                    &c.infill_region,
                     angle,
                     spacing,
                     process.infill_link_max_ratio * spacing,
                     pos,
                 ) {
-                    beads.push(Bead {
+                    pos = pts.last().copied();
+                    planned.push(cover::PlannedBead {
                         role: SegmentRole::Infill,
-                        width_speed: vec![(w, ts); pts.len()],
+                        widths: vec![w; pts.len()],
                         pts,
+                        closed: false,
                     });
                 }
             }
+            let mut thin = c.thin;
+            let (added, left) = cover::fill_residual(
+                &c.target,
+                &c.part,
+                &planned.iter().chain(&thin).cloned().collect::<Vec<_>>(),
+                process,
+            );
+            thin.extend(added);
+            let (thin, _) = cover::nearest_first(thin, pos);
+            planned.extend(thin);
+            (planned, left)
         }
         WidthMode::WallDriven => {
             let limits = process.width_limits_mm();
-            for samples in wall::mid_wall_loops(rings, limits, process.wall_sample_mm, tol) {
+            let part = region::union(rings);
+            let target = region::grow(&part, process.machining_allowance_mm, tol);
+            let target_rings: Vec<Vec<P2>> = target.iter().flatten().cloned().collect();
+            let mut planned = Vec::new();
+            for samples in wall::mid_wall_loops(&target_rings, limits, process.wall_sample_mm, tol)
+            {
                 let samples = rotate_samples(&samples, shift);
-                let mut pts = Vec::with_capacity(samples.len() + 1);
-                let mut ws = Vec::with_capacity(samples.len() + 1);
-                for s in samples.iter().chain(samples.first()) {
-                    pts.push(s.xy);
-                    let ts = bead::travel_speed_for_width_mm_s(s.width_mm, wfs)?;
-                    ws.push((s.width_mm, ts));
-                }
-                beads.push(Bead {
+                let pts: Vec<P2> = samples
+                    .iter()
+                    .chain(samples.first())
+                    .map(|s| s.xy)
+                    .collect();
+                let widths = samples
+                    .iter()
+                    .chain(samples.first())
+                    .map(|s| s.width_mm)
+                    .collect();
+                planned.push(cover::PlannedBead {
                     role: SegmentRole::WallBead,
                     pts,
-                    width_speed: ws,
+                    widths,
+                    closed: true,
                 });
             }
+            let (added, left) = cover::fill_residual(&target, &part, &planned, process);
+            let (added, _) =
+                cover::nearest_first(added, planned.last().and_then(|b| b.pts.last().copied()));
+            planned.extend(added);
+            (planned, left)
         }
+    };
+    let fixed_w = process.fixed_width_mm();
+    let mut beads: Vec<Bead> = Vec::with_capacity(planned.len());
+    for b in planned {
+        let width_speed = b
+            .widths
+            .iter()
+            .map(|&w| {
+                if (w - fixed_w).abs() < 1e-12 {
+                    Ok((w, process.travel_speed_mm_s))
+                } else {
+                    bead::travel_speed_for_width_mm_s(w, wfs).map(|ts| (w, ts))
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        beads.push(Bead {
+            role: b.role,
+            pts: b.pts,
+            width_speed,
+        });
     }
-    Ok(assemble(layer, process, angle, beads, from))
+    let mut tp = assemble(layer, process, angle, beads, from);
+    tp.uncovered = uncovered
+        .iter()
+        .map(|s| {
+            let (lo, hi) = region::shape_bbox(s);
+            UncoveredRegion {
+                bbox_min_mm: lo,
+                bbox_max_mm: hi,
+                area_mm2: region::shape_area(s),
+            }
+        })
+        .collect();
+    Ok(tp)
 }
 
 /// The loop of samples started at the sample nearest to arc length `shift_mm` (mod the loop's
@@ -454,6 +524,7 @@ fn assemble(
         travel_time_s,
         dwell_time_s: process.dwell_s,
         arc_starts,
+        uncovered: Vec::new(),
     }
 }
 
