@@ -163,13 +163,14 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         )),
         "{sheet_machine}"
     );
-    // The WAAM job: the calibration cube sliced (12 layers of 1.6 mm), emitted as ABB RAPID and
+    // The WAAM job: the calibration cube sliced (14 layers of 1.6 mm: 20 mm and the 1 mm
+    // machining allowance on top, issue 20), emitted as ABB RAPID and
     // run over RWS on the simulator the bridge started.
     let waam = stdout
         .lines()
         .find(|l| l.contains("| waam    |"))
         .unwrap_or_else(|| panic!("no waam row in {stdout}"));
-    assert!(waam.contains("| waam    | 12 layers, "), "{waam}");
+    assert!(waam.contains("| waam    | 14 layers, "), "{waam}");
     let waam_program = std::fs::read_to_string(out_dir.path().join("WAAM_demo_waam.mod")).unwrap();
     assert!(waam_program.contains("ArcLStart"), "an arc-welding program");
     assert!(out_dir.path().join("WAAM_demo_waam.pgf").exists());

@@ -375,13 +375,11 @@ fn the_20mm_cube_is_contained_with_its_allowance() {
 }
 
 #[test]
-#[ignore = "issue 20 open: the independent check finds horizontal faces (plate_holes top at 12.7 mm, idler_riser step at 6.35 mm) short of the allowance; the slicer's own measure says 0.91/0.81 mm"]
 fn plate_holes_is_contained_with_its_allowance() {
     assert_accepted("plate_holes", &repo("tests/data/stl/plate_holes.STL"));
 }
 
 #[test]
-#[ignore = "issue 20 open: the independent check finds horizontal faces (plate_holes top at 12.7 mm, idler_riser step at 6.35 mm) short of the allowance; the slicer's own measure says 0.91/0.81 mm"]
 fn idler_riser_in_mm_is_contained_with_its_allowance() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("idler_riser_mm.stl");
@@ -519,7 +517,8 @@ ENDMODULE
     let beads = beads_of(&run, facts, ToolPoint::BeadTop).unwrap();
     assert_eq!(beads.len(), 1);
     let w = beads::bead_width_mm(8.0, 5.5);
-    assert!((2.0 * beads[0].half_width - w).abs() < 1e-12);
+    // The model widens each bead by the program's 0.001 mm position resolution a side.
+    assert!((2.0 * beads[0].half_width - w - 2e-3).abs() < 1e-12);
     let h = beads::bead_height_mm(8.0, 5.5, 1.2);
     assert!((beads[0].z_top - 1.0).abs() < 1e-12 && (beads[0].z_base - (1.0 - h)).abs() < 1e-12);
 }

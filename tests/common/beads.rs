@@ -217,7 +217,7 @@ pub fn beads_of(
                 beads.push(Bead {
                     a: [from[0], from[1]],
                     b: [to[0], to[1]],
-                    half_width: w / 2.0,
+                    half_width: w / 2.0 + JOIN_MM,
                     z_base,
                     z_top: z_base + h,
                     travel_speed_mm_s: ts,
@@ -254,6 +254,11 @@ pub struct Deposit {
 
 /// Tolerance of "on the boundary" (mm).
 const EPS: f64 = 1e-6;
+/// The program's position resolution, mm (RAPID targets are written to 0.001 mm). Each bead is
+/// modelled this much wider on either side: infill beads laid exactly a bead width apart would
+/// otherwise show slits of up to a micrometre wherever rounding moved them apart, which no
+/// weld pool leaves.
+const JOIN_MM: f64 = 1e-3;
 
 impl Deposit {
     pub fn new(beads: Vec<Bead>) -> Self {
