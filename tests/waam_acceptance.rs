@@ -258,6 +258,38 @@ fn accept(label: &str, stl: &Path) -> Outcome {
     let wobjs: std::collections::BTreeSet<&str> =
         run.motions.iter().map(|m| m.wobj.as_str()).collect();
     assert_eq!(wobjs.len(), 1, "{label}: one work object: {wobjs:?}");
+
+    // Reachability: every robtarget has a joint solution in its written robconf, and forward
+    // kinematics of that solution gives the robtarget back (the robot model, tool and work
+    // object of the profile, through `cell_kinematics`).
+    let profile = cell_profiles::MachineProfile::resolve(PROFILE).unwrap();
+    let robot_cell = cell_emitter::rapid::reach::RobotCell::of(&profile)
+        .unwrap()
+        .expect("the WAAM profile has a robot");
+    assert_eq!(run.confl, vec!["On".to_string()], "{label}: ConfL \\On");
+    for m in &run.motions {
+        let t = &m.target;
+        let conf = t.conf.map(|c| c as i32);
+        let world = robot_cell.target_in_world(t.pos, t.quat);
+        let solutions = robot_cell
+            .robot
+            .solutions_with_confdata(&world, &robot_cell.tool, conf);
+        let Some(q) = solutions.first() else {
+            failures.push(format!(
+                "{} ({}:{}): no joint solution in robconf {conf:?}",
+                m.target_name, m.file, m.line
+            ));
+            break;
+        };
+        let back = robot_cell.robot.forward(q, &robot_cell.tool).unwrap();
+        if back.distance_mm(&world) > 1e-6 || back.angle_to(&world) > 1e-6 {
+            failures.push(format!(
+                "{}: forward kinematics gives {back:?}, not the robtarget",
+                m.target_name
+            ));
+            break;
+        }
+    }
     let widths = beads
         .iter()
         .map(|b| 2.0 * b.half_width)
