@@ -526,11 +526,33 @@ pub fn run_until(
             layer_height_mm: h,
         });
     }
-    let mut stack = crate::slab::deposit_layers(&mesh, h, job.process.machining_allowance_mm)
-        .map_err(|error| JobError::Slice {
-            file: name.clone(),
-            error,
-        })?;
+    // The deposit regions, layer by layer, with progress and the stop hook (thin layers make
+    // this phase long).
+    let mut sliced = (0, 0);
+    let stack = crate::slab::deposit_layers(
+        &mesh,
+        h,
+        job.process.machining_allowance_mm,
+        &mut |done, total| {
+            sliced = (done, total);
+            progress(JobProgress {
+                phase: Phase::Slice,
+                layers_done: done,
+                layers_total: total,
+            });
+            !stop()
+        },
+    )
+    .map_err(|error| JobError::Slice {
+        file: name.clone(),
+        error,
+    })?;
+    let Some(mut stack) = stack else {
+        return Err(JobError::Cancelled {
+            layers_done: 0,
+            layers_total: sliced.1,
+        });
+    };
     let offset = placement_offset(job.placement, lo, hi);
     for l in &mut stack.layers {
         l.z_mm += offset[2];
@@ -837,8 +859,30 @@ mod tests {
             ),
             "stops right after loading: {e}"
         );
+        // Stopped while the layers' regions are computed (thin layers make that phase long).
+        let sliced = std::cell::Cell::new(0);
+        let e = run_until(
+            &cube,
+            |p| {
+                if p.phase == Phase::Slice {
+                    sliced.set(p.layers_done)
+                }
+            },
+            &|| sliced.get() >= 2,
+        )
+        .unwrap_err();
+        assert_eq!(e.to_string(), "cancelled after 0 of 14 layers");
         let done = std::cell::Cell::new(0);
-        let e = run_until(&cube, |p| done.set(p.layers_done), &|| done.get() >= 3).unwrap_err();
+        let e = run_until(
+            &cube,
+            |p| {
+                if p.phase == Phase::Plan {
+                    done.set(p.layers_done)
+                }
+            },
+            &|| done.get() >= 3,
+        )
+        .unwrap_err();
         assert!(
             matches!(
                 e,
@@ -860,9 +904,15 @@ mod tests {
         // layers (12 reached only 19.2 mm).
         assert_eq!(out.report.layers, 14, "20 mm cube at 1.6 mm layers");
         assert_eq!(out.layers.len(), 14);
+        // Monotone within each phase: slicing counts the layers' regions, planning their beads.
         assert!(seen
             .windows(2)
-            .all(|w| w[0].layers_done <= w[1].layers_done));
+            .all(|w| w[0].phase != w[1].phase || w[0].layers_done <= w[1].layers_done));
+        assert_eq!(
+            seen.iter().filter(|p| p.phase == Phase::Slice).count(),
+            15,
+            "one report before slicing and one per layer"
+        );
         assert_eq!(seen.last().unwrap().phase, Phase::Done);
         assert_eq!(
             seen.iter().filter(|p| p.phase == Phase::Plan).count(),

@@ -23,9 +23,17 @@ const END_INSET_MM: f64 = 0.01;
 /// `z_min + (k + ½)·h`, its contours the union region (outer CCW, holes CW, nesting parents
 /// set) and the open chains of the plane nearest the slab's middle.
 ///
+/// `layer_done(done, total)` is called after each layer; when it returns false the work stops
+/// and `Ok(None)` is returned (a cancelled job: thin layers make this phase long).
+///
 /// # Errors
 /// As [`cell_mesh::slice()`] (bad layer height, too many layers).
-pub fn deposit_layers(mesh: &Mesh, h: f64, allowance_mm: f64) -> Result<LayerStack, SliceError> {
+pub fn deposit_layers(
+    mesh: &Mesh,
+    h: f64,
+    allowance_mm: f64,
+    layer_done: &mut dyn FnMut(usize, usize) -> bool,
+) -> Result<Option<LayerStack>, SliceError> {
     if !(h.is_finite() && h > 0.0) {
         return Err(SliceError::BadLayerHeight(h));
     }
@@ -93,13 +101,16 @@ pub fn deposit_layers(mesh: &Mesh, h: f64, allowance_mm: f64) -> Result<LayerSta
             open_chains,
             degenerate_loops: 0,
         });
+        if !layer_done(k + 1, n) {
+            return Ok(None);
+        }
     }
-    Ok(LayerStack {
+    Ok(Some(LayerStack {
         layers,
         layer_height_mm: h,
         first_z_mm: lo[2] + 0.5 * h,
         chain_tolerance_mm: planes.chain_tolerance_mm,
-    })
+    }))
 }
 
 /// Shapes (outer then holes) as contours with nesting: a hole's parent is its outer, an outer's
