@@ -165,6 +165,17 @@ struct Move {
     robconf: Option<[i32; 4]>,
 }
 
+/// The profile's `rapid` section, or [`EmitError::MissingSection`] naming the profile.
+pub(crate) fn rapid_section(profile: &MachineProfile) -> Result<&RapidSettings, EmitError> {
+    profile
+        .rapid
+        .as_ref()
+        .ok_or_else(|| EmitError::MissingSection {
+            profile: profile.name.clone(),
+            section: "rapid",
+        })
+}
+
 /// The RAPID files for `toolpath` on `profile` (module docs): the main module first, then the
 /// part modules (if split), then the `.pgf`.
 ///
@@ -179,13 +190,7 @@ pub fn emit(
     profile: &MachineProfile,
     job_id: &str,
 ) -> Result<Vec<ProgramFile>, EmitError> {
-    let r = profile
-        .rapid
-        .as_ref()
-        .ok_or_else(|| EmitError::MissingSection {
-            profile: profile.name.clone(),
-            section: "rapid",
-        })?;
+    let r = rapid_section(profile)?;
     if !['X', 'Y', 'Z'].iter().all(|a| profile.axes.contains_key(a)) {
         return Err(EmitError::NoAxis {
             profile: profile.name.clone(),

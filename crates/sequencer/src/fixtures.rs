@@ -3,6 +3,9 @@
 //! nested part (the seed 003 §A2 structure), with the precedence rules built by hand in both
 //! modes.
 
+use cell_profiles::{Compensation, LeadShape};
+
+use crate::cut::CutSpec;
 use crate::precedence::{Precedence, PrecedenceMode};
 use crate::problem::{Contour, ContourRole, Point, Problem};
 
@@ -172,5 +175,20 @@ pub fn scattered(n: usize, seed: u64) -> Problem {
             predecessors: vec![vec![]; n],
             groups: vec![],
         },
+    }
+}
+
+/// The cut of the shipped plasma profiles' default material (6 mm mild steel): kerf 1.5 mm,
+/// 5 mm arc lead-in, 2 mm lead-out, centre pierce below 12 mm, geometric compensation.
+pub fn plasma_cut_spec() -> CutSpec {
+    CutSpec {
+        kerf_mm: 1.5,
+        lead_in_mm: 5.0,
+        lead_shape: LeadShape::Arc,
+        lead_out_mm: 2.0,
+        overcut_mm: 0.0,
+        small_hole_diameter_mm: 12.0,
+        skip_too_small_holes: false,
+        compensation: Compensation::Geometric,
     }
 }

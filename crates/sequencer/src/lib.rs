@@ -29,7 +29,7 @@
 //!   `CutPlan` messages (notes §A6 outputs).
 //! - [`plan_svg`]: the picture of a plan (`plan.svg`): sheet, parts, cuts, lead-ins, pierces,
 //!   cut order, rapids and overheats, in machine coordinates (issue 19).
-//! - [`fixtures`]: hand-built grid instances for tests and the bench.
+//! - [`fixtures`]: hand-built grid instances and a plasma cut spec for tests and the bench.
 //!
 //! Everything here is synchronous and free of ROS, DDS, tokio and Rerun (checked by
 //! `tests/architecture.rs`); the `sequencer` node (`nodes/sequencer`) is a thin adapter over

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use cell_geometry::point_in_ring_nonzero;
 use cell_msgs::ToolpathSegment;
-use cell_profiles::{Compensation, LeadShape};
+use cell_profiles::LeadShape;
 use cell_sequencer::cut::{cut_problem, CutSpec};
 use cell_sequencer::dxf::{read_layout, DxfOptions};
 use cell_sequencer::generator::{generate, generate_perforated, GeneratorConfig, PerforatedConfig};
@@ -28,16 +28,7 @@ fn data(name: &str) -> PathBuf {
 }
 
 fn plasma() -> CutSpec {
-    CutSpec {
-        kerf_mm: 1.5,
-        lead_in_mm: 5.0,
-        lead_shape: LeadShape::Arc,
-        lead_out_mm: 2.0,
-        overcut_mm: 0.0,
-        small_hole_diameter_mm: 12.0,
-        skip_too_small_holes: false,
-        compensation: Compensation::Geometric,
-    }
+    cell_sequencer::fixtures::plasma_cut_spec()
 }
 
 fn laser() -> CutSpec {

@@ -42,13 +42,7 @@ impl RobotCell {
         let Some(section) = &profile.robot else {
             return Ok(None);
         };
-        let r = profile
-            .rapid
-            .as_ref()
-            .ok_or_else(|| EmitError::MissingSection {
-                profile: profile.name.clone(),
-                section: "rapid",
-            })?;
+        let r = super::rapid_section(profile)?;
         let o = &section.opw;
         let geometry = OpwGeometry {
             a1_mm: o.a1_mm,

@@ -259,7 +259,7 @@ impl std::fmt::Display for Undeclared {
 pub fn check_names(modules: &[(&str, &str)], controller_data: &[&str]) -> Result<(), Undeclared> {
     let lexed: Vec<(&str, Vec<(usize, Lexeme)>)> = modules
         .iter()
-        .map(|(name, text)| (*name, lex(text)))
+        .map(|(name, text)| (*name, lex(text).0))
         .collect();
     let mut declared: HashSet<String> = controller_data
         .iter()
@@ -344,10 +344,11 @@ enum Lexeme {
 }
 
 /// The module's words and punctuation with their 1-based line; comments dropped, a string
-/// literal as the punctuation `"`. A string left open ends at its line (the structure check
-/// reports it).
-fn lex(text: &str) -> Vec<(usize, Lexeme)> {
+/// literal as the punctuation `"`. A string left open ends at its line; the first such line is
+/// returned too (the structure check reports it).
+fn lex(text: &str) -> (Vec<(usize, Lexeme)>, Option<usize>) {
     let mut out = Vec::new();
+    let mut unclosed = None;
     for (i, line) in text.lines().enumerate() {
         let n = i + 1;
         let mut in_string = false;
@@ -374,49 +375,30 @@ fn lex(text: &str) -> Vec<(usize, Lexeme)> {
                 c => out.push((n, Lexeme::Punct(c))),
             }
         }
+        if in_string && unclosed.is_none() {
+            unclosed = Some(n);
+        }
         if !word.is_empty() {
             out.push((n, Lexeme::Word(word)));
         }
     }
-    out
+    (out, unclosed)
 }
 
 /// Identifier-like words with their 1-based line, comments (`!` to end of line) and string
-/// literals removed.
+/// literals removed ([`lex`]'s words).
 fn tokenize(text: &str) -> Result<Vec<(usize, String)>, LoadFailure> {
-    let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let n = i + 1;
-        let mut in_string = false;
-        let mut word = String::new();
-        for c in line.chars() {
-            if in_string {
-                if c == '"' {
-                    in_string = false;
-                }
-                continue;
-            }
-            if c.is_alphanumeric() || c == '_' {
-                word.push(c);
-                continue;
-            }
-            if !word.is_empty() {
-                out.push((n, std::mem::take(&mut word)));
-            }
-            match c {
-                '"' => in_string = true,
-                '!' => break,
-                _ => {}
-            }
-        }
-        if in_string {
-            return Err(fail(n, "string literal not closed on its line"));
-        }
-        if !word.is_empty() {
-            out.push((n, word));
-        }
+    let (lexemes, unclosed) = lex(text);
+    if let Some(n) = unclosed {
+        return Err(fail(n, "string literal not closed on its line"));
     }
-    Ok(out)
+    Ok(lexemes
+        .into_iter()
+        .filter_map(|(n, l)| match l {
+            Lexeme::Word(w) => Some((n, w)),
+            Lexeme::Punct(_) => None,
+        })
+        .collect())
 }
 
 #[cfg(test)]

@@ -43,16 +43,7 @@ fn layout(sheet: [f64; 2], parts: Vec<Part>) -> Layout {
 }
 
 fn plasma() -> CutSpec {
-    CutSpec {
-        kerf_mm: 1.5,
-        lead_in_mm: 5.0,
-        lead_shape: LeadShape::Arc,
-        lead_out_mm: 2.0,
-        overcut_mm: 0.0,
-        small_hole_diameter_mm: 12.0,
-        skip_too_small_holes: false,
-        compensation: Compensation::Geometric,
-    }
+    crate::fixtures::plasma_cut_spec()
 }
 
 fn example() -> Layout {
