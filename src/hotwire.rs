@@ -6,7 +6,9 @@
 //! order; u,v on a 4-axis machine), `DIR/report.json` (baseline and optimised exposure
 //! statistics of the root and, on a tapered panel, the tip; loss; run data) and
 //! `DIR/toolpath.json` (the plan's `Toolpath` message as JSON, what `cell emit --toolpath`
-//! reads).
+//! reads) and `DIR/exposure.svg` (the plan drawn: foil, baseline and optimised paths with the
+//! leads, the wire's distance from the foil and the exposure per panel before and after
+//! against the CSE; [`job::exposure_svg`]).
 //!
 //! With `--profile NAME`, also the machine program for that profile through
 //! [`cell_emitter::emit_program`]: `DIR/program.ngc` for G-code, or the RAPID files under their
@@ -78,9 +80,13 @@ pub struct HotwireArgs {
     /// Cutting feed of the faster foam face (mm/s).
     #[arg(long, value_name = "MM_S")]
     pub feed: Option<f64>,
-    /// Make the feed along the path a design variable too (0.5–1.5 × --feed, constant
-    /// current): slower where the surface needs more heat.
+    /// Keep the feed constant along the path (the paper's experiments) instead of making it a
+    /// design variable (the default: 0.5–1.5 × --feed within the machine's feed limit, at
+    /// constant current; slower where the surface needs more heat).
     #[arg(long)]
+    pub constant_feed: bool,
+    /// Accepted for older scripts: the feed is a design variable by default now.
+    #[arg(long, hide = true)]
     pub optimise_feed: bool,
     /// CSE values for the calibration table in report.json (seed 000 §IV.D; default: 0.5 to
     /// 1.5 times the plan's CSE in 11 steps).
@@ -229,9 +235,7 @@ pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
         feed_mm_s: a.feed.unwrap_or(defaults.feed_mm_s),
         panels: a.panels.unwrap_or(defaults.panels),
         objective: cell_planner::pso::Objective {
-            feed: a
-                .optimise_feed
-                .then(cell_planner::pso::FeedVariable::default),
+            feed: (!a.constant_feed).then(cell_planner::pso::FeedVariable::default),
             ..defaults.objective
         },
         pso: PsoConfig {
@@ -397,6 +401,10 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         ("trajectory.csv", trajectory_csv(&plan)),
         ("report.json", json + "\n"),
         ("toolpath.json", toolpath_json + "\n"),
+        (
+            "exposure.svg",
+            job::exposure_svg(&plan, Some(job.objective.min_clearance_mm)),
+        ),
     ] {
         let path = a.out.join(name);
         if let Err(e) = std::fs::write(&path, text) {
@@ -435,6 +443,10 @@ pub fn run(a: HotwireArgs) -> ExitCode {
         plan.seconds,
         plan.machine,
         a.out.display()
+    );
+    println!(
+        "cell hotwire: picture {}",
+        a.out.join("exposure.svg").display()
     );
     if let Some(line) = program {
         println!("cell hotwire: program {line}");

@@ -9,8 +9,8 @@
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
 //! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
-//!   cut on the spot (no DDS) and writes `trajectory.csv`, `report.json`, `toolpath.json` and,
-//!   with `--profile`, the machine program (see [`hotwire`]).
+//!   cut on the spot (no DDS) and writes `trajectory.csv`, `report.json`, `toolpath.json`,
+//!   `exposure.svg` and, with `--profile`, the machine program (see [`hotwire`]).
 //! - `cell emit --toolpath FILE --profile NAME --out FILE` turns a toolpath file into a machine
 //!   program on the spot (see [`emit`]).
 //! - `cell sheet --layout FILE.dxf|json --out DIR [--policy …]` sequences the cut of a nested
@@ -116,7 +116,8 @@ enum Command {
         args: Vec<String>,
     },
     /// Plan one hot-wire cut without DDS: write DIR/trajectory.csv, DIR/report.json,
-    /// DIR/toolpath.json and, with --profile, the machine program (DIR/program.ngc).
+    /// DIR/toolpath.json, DIR/exposure.svg (the paths and the exposure per panel before and
+    /// after) and, with --profile, the machine program (DIR/program.ngc).
     Hotwire(Box<hotwire::HotwireArgs>),
     /// Turn a toolpath file (JSON, e.g. from `cell hotwire`) into a machine program without
     /// DDS. Exit status: 64 bad arguments or profile, 65 a toolpath the emitter refuses (no

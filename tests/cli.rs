@@ -278,6 +278,17 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
     for entity in [
         "/hotwire/trajectory",
         "/hotwire/loss",
+        // The planner's picture (as exposure.svg): the section's paths and the profiles per
+        // panel before and after.
+        "/hotwire/picture/root/baseline",
+        "/hotwire/picture/root/optimised",
+        "/hotwire/picture/root/lead_in",
+        "/hotwire/exposure_profile/root/baseline",
+        "/hotwire/exposure_profile/root/optimised",
+        "/hotwire/exposure_profile/root/cse",
+        "/hotwire/clearance_profile/root/optimised",
+        "/hotwire/picture/tip/optimised",
+        "/hotwire/exposure_profile/tip/cse",
         "/emitter/log",
         "/machine/grbl-sim/position",
         "/machine/grbl-sim/trace/0",

@@ -228,6 +228,64 @@ fn cell_hotwire_writes_trajectory_and_report() {
     // Monotone up to the 0.05 mm trailing-edge search step.
     assert!(chords.windows(2).all(|w| w[1] >= w[0] - 0.1), "{chords:?}");
     assert!(chords[0] < chords[10] && chords[10] <= 151.0, "{chords:?}");
+
+    // exposure.svg: well-formed (read by xml-rs, which shares no code with the writer), the
+    // paths and one exposure point per panel (--panels 40) before and after, the CSE line.
+    let svg = out.join("exposure.svg");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains(&format!("cell hotwire: picture {}", svg.display())),
+        "{stdout}"
+    );
+    let elements = svg_elements(&svg);
+    let points = |id: &str| {
+        let (_, attributes) = elements
+            .iter()
+            .find(|(_, a)| a.get("id").map(String::as_str) == Some(id))
+            .unwrap_or_else(|| panic!("exposure.svg has no {id}"));
+        attributes
+            .get("points")
+            .map_or(0, |p| p.split_whitespace().count())
+    };
+    for id in ["root-exposure-baseline", "root-exposure-optimised"] {
+        assert_eq!(points(id), 40, "{id}");
+    }
+    for id in ["root-foil", "root-baseline-path", "root-optimised-path"] {
+        assert!(points(id) > 40, "{id}");
+    }
+    for id in [
+        "root-lead-in",
+        "root-lead-out",
+        "root-cse",
+        "root-clearance-margin",
+    ] {
+        points(id);
+    }
+    assert!(elements.iter().any(|(name, _)| name == "title"));
+}
+
+/// The elements of an SVG file: (name, attributes); any XML error fails the test.
+fn svg_elements(
+    path: &std::path::Path,
+) -> Vec<(String, std::collections::HashMap<String, String>)> {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    xml::reader::EventReader::new(std::io::BufReader::new(file))
+        .into_iter()
+        .filter_map(|event| {
+            match event.unwrap_or_else(|e| panic!("{}: not well-formed: {e}", path.display())) {
+                xml::reader::XmlEvent::StartElement {
+                    name, attributes, ..
+                } => Some((
+                    name.local_name,
+                    attributes
+                        .into_iter()
+                        .map(|a| (a.name.local_name, a.value))
+                        .collect(),
+                )),
+                _ => None,
+            }
+        })
+        .collect()
 }
 
 #[test]
@@ -292,6 +350,18 @@ fn cell_hotwire_plans_a_tapered_panel_and_refuses_it_on_a_two_axis_machine() {
         rows.iter().all(|r| r[4] <= 25.0 + 1e-3),
         "machine feed limit"
     );
+    // The picture draws both sections.
+    let ids: Vec<String> = svg_elements(&out.join("exposure.svg"))
+        .into_iter()
+        .filter_map(|(_, mut a)| a.remove("id"))
+        .collect();
+    for id in [
+        "root-exposure-optimised",
+        "tip-exposure-optimised",
+        "tip-cse",
+    ] {
+        assert!(ids.iter().any(|i| i == id), "exposure.svg has no {id}");
+    }
 
     let run = std::process::Command::new(CELL)
         .args(args)

@@ -165,57 +165,65 @@ pub(crate) fn outward_vertex_normals(ring: &[Point2<f64>]) -> Vec<Vector2<f64>> 
         .collect()
 }
 
-/// δ(u) of a periodic uniform cubic B-spline with control values `controls` (K ≥ 1) at
-/// u ∈ [0, 1) (any real u is wrapped): with t = u·K, k = ⌊t⌋, f = t − k,
-/// δ = B₀(f)·c_{k−1} + B₁(f)·c_k + B₂(f)·c_{k+1} + B₃(f)·c_{k+2} (indices mod K), the uniform
-/// cubic basis B₀ = (1−f)³/6, B₁ = (3f³ − 6f² + 4)/6, B₂ = (−3f³ + 3f² + 3f + 1)/6, B₃ = f³/6.
-/// C² and periodic: δ(0) = δ(1). Written here (10 lines) because the spline crates on offer
-/// are general NURBS libraries and this is all the optimiser needs. Returns 0 for no controls.
-pub fn periodic_cubic_bspline(controls: &[f64], u: f64) -> f64 {
-    if controls.is_empty() {
-        return 0.0;
-    }
-    let (idx, w) = basis(controls.len(), u);
-    (0..4).map(|q| w[q] * controls[idx[q]]).sum()
+pub use crate::spline::periodic_cubic_bspline;
+use crate::spline::SplineEnds;
+
+/// Where along the path the spline's control values act: the spline parameter u of each
+/// baseline vertex.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlSpacing {
+    /// u = normalised arc length: controls evenly spaced along the path (seed 000, the
+    /// notes).
+    ArcLength,
+    /// u = vertex index / vertex count: the baseline is the offset of a foil resampled with
+    /// cosine spacing ([`Baseline::fixed_offset`]), so the controls cluster at the leading and
+    /// trailing edges like the surface panels do, where the exposure changes fastest (default;
+    /// crate docs, "Why the swarm stalled").
+    #[default]
+    PathPoints,
 }
 
-/// Indices and weights of the four non-zero basis functions at u (see
-/// [`periodic_cubic_bspline`]).
-fn basis(k: usize, u: f64) -> ([usize; 4], [f64; 4]) {
-    if k == 0 {
-        return ([0; 4], [0.0; 4]);
-    }
-    let t = u.rem_euclid(1.0) * k as f64;
-    let i = (t.floor() as usize).min(k - 1);
-    let f = t - i as f64;
-    let (f2, f3) = (f * f, f * f * f);
-    let w = [
-        (1.0 - f).powi(3) / 6.0,
-        (3.0 * f3 - 6.0 * f2 + 4.0) / 6.0,
-        (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0) / 6.0,
-        f3 / 6.0,
-    ];
-    let idx = [(i + k - 1) % k, i, (i + 1) % k, (i + 2) % k];
-    (idx, w)
-}
-
-/// A baseline displaced along its normals by a periodic cubic B-spline of K control values
-/// (seed 000 §IV.C): vertex = baseline vertex + δ(u)·n, u its normalised arc length. The basis
-/// is precomputed, so [`Trajectory::path_into`] costs four multiply-adds per vertex.
+/// A baseline displaced along its normals by a cubic B-spline of K control values (seed 000
+/// §IV.C; periodic or open ends, [`SplineEnds`]): vertex = baseline vertex + δ(u)·n, u its
+/// normalised arc length. The basis is precomputed, so [`Trajectory::path_into`] costs four
+/// multiply-adds per vertex.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trajectory {
     baseline: Baseline,
+    /// The spline parameter of each baseline vertex, 0 … 1 ([`ControlSpacing`]).
+    u: Vec<f64>,
     k: usize,
     idx: Vec<[usize; 4]>,
     w: Vec<[f64; 4]>,
 }
 
 impl Trajectory {
-    /// Parameterises `baseline` with `control_points` (K) control values.
+    /// Parameterises `baseline` with `control_points` (K) control values of a periodic spline
+    /// (the paper's).
     ///
     /// # Errors
     /// `control_points` < 4.
     pub fn new(baseline: Baseline, control_points: usize) -> Result<Self, TrajectoryError> {
+        Self::with_ends(
+            baseline,
+            control_points,
+            SplineEnds::Periodic,
+            ControlSpacing::ArcLength,
+        )
+    }
+
+    /// Parameterises `baseline` with K = `control_points` control values of a spline with the
+    /// given end condition. With open ends the path's last point need not repeat its first.
+    ///
+    /// # Errors
+    /// `control_points` < 4.
+    pub fn with_ends(
+        baseline: Baseline,
+        control_points: usize,
+        ends: SplineEnds,
+        spacing: ControlSpacing,
+    ) -> Result<Self, TrajectoryError> {
         if control_points < 4 {
             return Err(TrajectoryError::InvalidParameter {
                 name: "control_points".into(),
@@ -223,13 +231,17 @@ impl Trajectory {
                 requirement: "at least 4",
             });
         }
-        let (idx, w) = baseline
-            .arc
-            .iter()
-            .map(|&u| basis(control_points, u))
-            .unzip();
+        let u: Vec<f64> = match spacing {
+            ControlSpacing::ArcLength => baseline.arc.clone(),
+            ControlSpacing::PathPoints => {
+                let m = (baseline.points.len() - 1) as f64;
+                (0..baseline.points.len()).map(|i| i as f64 / m).collect()
+            }
+        };
+        let (idx, w) = u.iter().map(|&u| ends.basis(control_points, u)).unzip();
         Ok(Self {
             baseline,
+            u,
             k: control_points,
             idx,
             w,
@@ -244,6 +256,11 @@ impl Trajectory {
     /// The undisplaced path.
     pub fn baseline(&self) -> &Baseline {
         &self.baseline
+    }
+
+    /// The spline parameter of each path point, 0 … 1.
+    pub fn parameters(&self) -> &[f64] {
+        &self.u
     }
 
     /// The displaced path for `controls` (mm along the outward normal; positive moves the wire
@@ -426,6 +443,11 @@ impl OutlineGrid {
             clamp(c, self.nx),
             clamp(d, self.ny),
         ))
+    }
+
+    /// The outline as given.
+    pub fn outline(&self) -> &[Point2<f64>] {
+        &self.outline
     }
 
     /// Exactly [`is_feasible`]`(path, outline, min_clearance_mm)`, visiting only outline

@@ -77,7 +77,7 @@ impl Default for PlannerParams {
             span_mm: job.span_mm,
             twist_pivot_chord_fraction: Placement::ROOT.pivot_chord_fraction,
             current_a: job.current_a,
-            optimise_feed: false,
+            optimise_feed: true,
             feed_mm_s: job.feed_mm_s,
             lead_in_mm: job.lead_in_mm,
             panels: job.panels,
@@ -244,6 +244,96 @@ fn log_to_rerun(node: &CellNode, plan: &HotwirePlan, toolpath: &Toolpath, profil
     );
 }
 
+/// Logs the picture `cell hotwire` draws in `exposure.svg` ([`job::exposure_svg`]), per section
+/// (`root`, and `tip` on a tapered panel):
+///
+/// - `/hotwire/picture/{section}/{foil,baseline,optimised,lead_in,lead_out}`: 2-D line strips
+///   in the section's own frame (LE at the origin, mm), y negated because Rerun's 2-D views
+///   point y down. Not magnified: the viewer zooms. (`/hotwire/{root,tip}_foil` and `_path`
+///   are the machine-placed 3-D foil and optimised path; the baseline and leads are only here.)
+/// - `/hotwire/exposure_profile/{section}/{baseline,optimised,cse}` and
+///   `/hotwire/clearance_profile/{section}/{baseline,optimised,margin}` (mm): one scalar per
+///   panel on the `panel` timeline (panels in Selig order from the trailing edge), so a
+///   time-series view with the `panel` timeline overlays before, after and the target. Chosen
+///   over bar charts, which show one series per view and cannot draw the CSE across them.
+fn log_picture(node: &CellNode, plan: &HotwirePlan, clearance_mm: f64) {
+    let Some(rec) = node.rerun().stream() else {
+        return;
+    };
+    let report = |r: Result<(), rerun::RecordingStreamError>| {
+        if let Err(e) = r {
+            tracing::warn!("rerun: {e}");
+        }
+    };
+    let grey = rerun::Color::from_rgb(140, 140, 140);
+    let blue = rerun::Color::from_rgb(31, 111, 209);
+    let orange = rerun::Color::from_rgb(224, 123, 0);
+    let red = rerun::Color::from_rgb(198, 40, 40);
+    let mut sections = vec![("root", &plan.root)];
+    sections.extend(plan.tip.as_ref().map(|t| ("tip", t)));
+    for (role, s) in sections {
+        for (name, pts, close, colour) in [
+            ("foil", &s.foil, true, rerun::Color::from_rgb(85, 85, 85)),
+            ("baseline", &s.baseline, true, grey),
+            ("optimised", &s.optimised, true, blue),
+            ("lead_in", &s.lead_in, false, orange),
+            ("lead_out", &s.lead_out, false, orange),
+        ] {
+            let strip = y_down_strip(pts.iter().map(|p| (p.x, p.y)), close);
+            report(rec.log(
+                format!("/hotwire/picture/{role}/{name}"),
+                &rerun::LineStrips2D::new([strip]).with_colors([colour]),
+            ));
+        }
+        let profiles = job::PanelProfiles::of(s);
+        let exposure = format!("/hotwire/exposure_profile/{role}");
+        let clearance = format!("/hotwire/clearance_profile/{role}");
+        for (entity, colour, label) in [
+            (format!("{exposure}/baseline"), grey, "baseline"),
+            (format!("{exposure}/optimised"), blue, "optimised"),
+            (format!("{exposure}/cse"), red, "CSE"),
+            (format!("{clearance}/baseline"), grey, "baseline (mm)"),
+            (format!("{clearance}/optimised"), blue, "optimised (mm)"),
+            (format!("{clearance}/margin"), red, "clearance margin (mm)"),
+        ] {
+            let style = rerun::SeriesLines::new()
+                .with_colors([colour])
+                .with_names([label]);
+            report(rec.log_static(entity, &style));
+        }
+        // One point per panel ([`job::PanelProfiles`] counts the panels with both exposures).
+        for i in 0..profiles.position.len() {
+            rec.set_time_sequence("panel", i as i64);
+            for (entity, value) in [
+                (format!("{exposure}/baseline"), s.baseline_exposure[i]),
+                (format!("{exposure}/optimised"), s.optimised_exposure[i]),
+                (format!("{exposure}/cse"), s.cse),
+                (
+                    format!("{clearance}/baseline"),
+                    profiles.baseline_clearance_mm[i],
+                ),
+                (
+                    format!("{clearance}/optimised"),
+                    profiles.optimised_clearance_mm[i],
+                ),
+                (format!("{clearance}/margin"), clearance_mm),
+            ] {
+                report(rec.log(entity, &rerun::Scalars::single(value)));
+            }
+        }
+        rec.disable_timeline("panel");
+    }
+}
+
+/// A 2-D line strip with y negated (Rerun's 2-D views point y down), closed if `close`.
+fn y_down_strip(points: impl Iterator<Item = (f64, f64)>, close: bool) -> Vec<[f32; 2]> {
+    let mut out: Vec<[f32; 2]> = points.map(|(x, y)| [x as f32, -y as f32]).collect();
+    if close && out.first() != out.last() {
+        out.extend(out.first().copied());
+    }
+    out
+}
+
 /// Logs one point of the loss curve on the `iteration` timeline.
 fn log_loss(node: &CellNode, iteration: usize, loss: f64) {
     if let Some(rec) = node.rerun().stream() {
@@ -374,6 +464,7 @@ impl GoalHandler for Planner {
                     Err(e) => tracing::warn!("plan_hotwire: {job_id}: exposure matrix: {e}"),
                 }
                 log_to_rerun(&self.node, &plan, &toolpath, &profile);
+                log_picture(&self.node, &plan, job.objective.min_clearance_mm);
                 let message = summary(&job_id, &job, &plan);
                 tracing::info!("plan_hotwire: {message}");
                 GoalEnd::succeeded(PlanHotwireResult {

@@ -21,11 +21,13 @@
 //! - `live`: live preview of the best path while the swarm runs ([`LiveMaps`]).
 //! - `output`: what a job produces ([`HotwirePlan`], [`SectionPlan`], [`JobProgress`]).
 //! - `views`: the `Toolpath` and `HeatMap` message views of a plan and their frame ids.
+//! - `picture`: `exposure.svg`, the plan drawn for the operator ([`exposure_svg`]).
 
 mod error;
 mod live;
 mod motion;
 mod output;
+mod picture;
 mod process;
 mod run;
 mod source;
@@ -36,8 +38,9 @@ pub use error::{JobError, JobParameter};
 pub use live::{LiveMaps, LiveOptions};
 pub use motion::Motion;
 pub use output::{CalibrationRow, ExposureStats, HotwirePlan, JobProgress, SectionPlan};
+pub use picture::{exposure_svg, PanelProfiles};
 pub use process::FALLBACK_OFFSET_MM;
-pub use run::{plan, plan_observed};
+pub use run::{lead_in_start, plan, plan_observed};
 pub use source::{AirfoilSource, EMBEDDED_AIRFOILS};
 pub use spec::{validate, HotwireJob, TipRequest, TipSection, DEFAULT_MACHINE};
 pub use views::{FRAME_ID, SECTION_FRAME_ID, TIP_FRAME_ID};

@@ -32,6 +32,9 @@ pub struct ExposureStats {
     pub max_abs: f64,
     /// Coefficient of variation of E (std / mean).
     pub cv: f64,
+    /// 95th percentile of |E − CSE| over the panels (nearest rank).
+    #[serde(default)]
+    pub p95_abs: f64,
 }
 
 impl ExposureStats {
@@ -42,6 +45,13 @@ impl ExposureStats {
             rms: (exposure.iter().map(|e| (e - cse).powi(2)).sum::<f64>() / n).sqrt(),
             max_abs: exposure.iter().map(|e| (e - cse).abs()).fold(0.0, f64::max),
             cv: coefficient_of_variation(exposure),
+            p95_abs: {
+                let mut d: Vec<f64> = exposure.iter().map(|e| (e - cse).abs()).collect();
+                d.sort_by(f64::total_cmp);
+                // Nearest rank: the ⌈0.95·N⌉-th smallest.
+                let rank = (0.95 * d.len() as f64).ceil() as usize;
+                d.get(rank.saturating_sub(1)).copied().unwrap_or(0.0)
+            },
         }
     }
 }
@@ -70,8 +80,9 @@ pub struct SectionPlan {
     pub surface: Vec<Point2<f64>>,
     /// The fixed-offset baseline path (closed).
     pub baseline: Vec<Point2<f64>>,
-    /// The path the wire follows on this face (closed): the optimised path, resampled point
-    /// for point with the other face's on a tapered panel.
+    /// The path the wire follows on this face (closed): the optimised path (with open spline
+    /// ends, plus the join from its last point back to its first), resampled point for point
+    /// with the other face's on a tapered panel.
     pub optimised: Vec<Point2<f64>>,
     /// Wire-centre offset of the baseline (mm).
     pub offset_mm: f64,
@@ -94,6 +105,12 @@ pub struct SectionPlan {
     /// Feed / nominal feed at each point of the optimised path as optimised (all 1 unless the
     /// feed is a variable, [`Objective::feed`](crate::pso::Objective::feed)).
     pub feed_ratio: Vec<f64>,
+    /// The lead-in in this section's frame (mm): from where the wire enters the foam to the
+    /// first point of [`SectionPlan::optimised`].
+    pub lead_in: Vec<Point2<f64>>,
+    /// The lead-out in this section's frame (mm): from the last point of
+    /// [`SectionPlan::optimised`] back out of the foam.
+    pub lead_out: Vec<Point2<f64>>,
 }
 
 /// A planned hot-wire cut (see the module docs): the root section's plan, the tip's on a

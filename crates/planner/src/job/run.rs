@@ -7,8 +7,9 @@ use std::time::Instant;
 use nalgebra::{Point2, Vector2};
 
 use crate::airfoil::{Airfoil, SyncedPoints};
-use crate::exposure::Panels;
+use crate::exposure::{ExposureModel, Panels};
 use crate::pso::{self, Objective, Problem, PsoConfig, PsoError};
+use crate::refine;
 use crate::trajectory::{is_feasible, Baseline};
 use crate::wing::{synchronise_paths, Placement, Towers};
 
@@ -54,6 +55,7 @@ fn plan_section(
     s: &SectionJob<'_>,
     foil: &Airfoil,
     chord_mm: f64,
+    lead_face: Option<&SectionPlan>,
     live: &mut Live<'_, impl FnMut(LiveMaps)>,
     progress: &mut impl FnMut(&JobProgress) -> ControlFlow<()>,
 ) -> Result<(SectionPlan, usize), JobError> {
@@ -73,7 +75,9 @@ fn plan_section(
         cse: job.cse,
         // Only the root's feed is a variable: the wire has one timing for both faces.
         feed: if s.frame_id == SECTION_FRAME_ID {
-            job.objective.feed
+            job.objective
+                .feed
+                .map(|f| f.within_machine(job.feed_mm_s, job.machine.max_feed_mm_s))
         } else {
             None
         },
@@ -81,7 +85,22 @@ fn plan_section(
     };
     // A sharp trailing edge repeats its point at both ends: one more point gives N panels.
     let surface_points = surface_points(foil, job.panels)?;
-    let problem = Problem::new(foil, surface_points, baseline, objective).map_err(wrap)?;
+    let mut problem = Problem::new(foil, surface_points, baseline, objective).map_err(wrap)?;
+    if job.lead_in_mm > 0.0 {
+        problem = problem
+            .with_lead_in(lead_in_start(foil, job.lead_in_mm, s.offset_mm))
+            .map_err(wrap)?;
+    }
+    if let Some(root) = lead_face {
+        // The tip face moves in step with the root: where the root's feed is ρ, the tip's
+        // dwell is 1/ρ its constant-feed dwell too (by normalised arc length, which the
+        // synchronisation matches on each side of the leading edge to within the sections'
+        // difference in shape; the exposure is recomputed on the synchronised paths after).
+        if root.feed_ratio.iter().any(|&r| r != 1.0) {
+            let profile = arc_profile(&root.optimised, &root.feed_ratio);
+            problem = problem.with_feed_profile(profile).map_err(wrap)?;
+        }
+    }
     let k = problem.trajectory().control_points();
     let baseline_exposure = problem.exposure(&vec![0.0; k]).map_err(wrap)?;
     live.show(&problem, &vec![0.0; k], 0, s.frame_id);
@@ -109,16 +128,60 @@ fn plan_section(
             iteration: s.iterations_before + result.iterations_run,
         });
     }
-    let optimised = problem.path(&result.controls);
+    // Local refinement from the swarm's best (crate::refine); progress keeps the swarm's count.
+    let done = s.iterations_before + result.iterations_run;
+    let refined = refine::refine(&problem, &result.controls, &job.refine, |r| {
+        progress(&JobProgress {
+            iteration: done,
+            total: s.iterations_total,
+            best_loss: r.loss,
+            eta_s: 0.0,
+        })
+    });
+    if refined.cancelled {
+        return Err(JobError::Cancelled { iteration: done });
+    }
+    if refined.history.len() > 1 && live.options.period.is_some() {
+        // Numbered after the swarm's iterations, like the loss history.
+        live.show(
+            &problem,
+            &refined.controls,
+            done + refined.iterations,
+            s.frame_id,
+        );
+    }
+    let mut history = result.history.clone();
+    history.extend(
+        refined.history[1..]
+            .iter()
+            .map(|&(i, l)| (result.iterations_run + i, l)),
+    );
+    let result = pso::PsoResult {
+        controls: refined.controls,
+        best_loss: refined.loss,
+        history,
+        ..result
+    };
+    let mut optimised = problem.path(&result.controls);
     let optimised_exposure = problem.exposure(&result.controls).map_err(wrap)?;
     let cse = problem.cse();
     // Point k is reached by segment k − 1; point 0 takes segment 0's ratio.
     let segment_ratios = problem.feed_ratios(&result.controls);
-    let mut feed_ratio = Vec::with_capacity(optimised.len());
+    let mut feed_ratio = Vec::with_capacity(optimised.len() + 1);
     feed_ratio.push(segment_ratios.first().copied().unwrap_or(1.0));
     feed_ratio.extend_from_slice(&segment_ratios);
+    // Open spline ends leave the last point off the first: the cut closes the loop with a
+    // straight join back to it (without it the wedge between lead-in and lead-out would stay
+    // on the part as a sliver). The join comes after every panel's cut point, so it adds no
+    // exposure.
+    if optimised.first() != optimised.last() {
+        optimised.push(optimised[0]);
+        feed_ratio.push(*feed_ratio.last().expect("a ratio per point"));
+    }
     let plan = SectionPlan {
         feed_ratio,
+        lead_in: Vec::new(),
+        lead_out: Vec::new(),
         airfoil: foil.name().to_string(),
         chord_mm,
         foil: foil.points().to_vec(),
@@ -136,6 +199,13 @@ fn plan_section(
         loss_history: result.history,
     };
     Ok((plan, result.iterations_run))
+}
+
+/// Where the lead-in starts: on the chord line, `lead_in_mm` behind the wire's pass round the
+/// trailing edge (the TE's midpoint plus the offset).
+pub fn lead_in_start(foil: &Airfoil, lead_in_mm: f64, offset_mm: f64) -> Point2<f64> {
+    let pts = foil.points();
+    nalgebra::center(&pts[0], &pts[pts.len() - 1]) + Vector2::new(lead_in_mm + offset_mm, 0.0)
 }
 
 /// Closed perimeter of a foil (mm).
@@ -226,6 +296,7 @@ pub fn plan_observed(
         &section_job(&root_name, root_offset, SECTION_FRAME_ID, 0),
         &root_foil,
         job.chord_mm,
+        None,
         &mut live,
         &mut progress,
     )?;
@@ -236,6 +307,7 @@ pub fn plan_observed(
                 &section_job(&name, tip_offset, TIP_FRAME_ID, iterations),
                 tip_foil,
                 t.chord_mm,
+                Some(&root),
                 &mut live,
                 &mut progress,
             )?;
@@ -263,16 +335,12 @@ pub fn plan_observed(
     } else {
         root.feed_ratio.clone()
     };
-    if let Some(t) = tip_plan.as_mut() {
-        refresh_exposure(job, &mut root, &root_cut, &cut_ratios)?;
-        refresh_exposure(job, t, &tip_cut, &vec![1.0; tip_cut.len()])?;
-    }
 
     // Leads: straight along each chord line, from behind the TE.
     let behind_te = |s: &SectionPlan| {
         let foil = &s.foil;
-        let te = nalgebra::center(&foil[0], &foil[foil.len() - 1]);
-        te + Vector2::new(job.lead_in_mm + s.offset_mm, 0.0)
+        nalgebra::center(&foil[0], &foil[foil.len() - 1])
+            + Vector2::new(job.lead_in_mm + s.offset_mm, 0.0)
     };
     let root_out = behind_te(&root);
     let (tip_section, tip_chord, placement) = match (&tip_plan, &tip) {
@@ -305,8 +373,19 @@ pub fn plan_observed(
     let lead_in = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
     let (r, t) = place(&root_cut, &tip_cut);
     let cut = mover.motion(&r, &t, &cut_ratios, &mut notes)?;
+    if let Some(t) = tip_plan.as_mut() {
+        // Both faces' exposure along the synchronised paths, at the dwell the carriages really
+        // give them: the root's optimised feed, and the slow-downs where a carriage reaches
+        // the machine's feed limit (the tip face moves in step with the root).
+        let dwell = dwell_ratios(&root_cut, &tip_cut, &cut, job.feed_mm_s);
+        refresh_exposure(job, &mut root, &root_foil, &root_cut, &dwell)?;
+        let tip_foil = &tip.as_ref().expect("a tip plan has a tip").1;
+        refresh_exposure(job, t, tip_foil, &tip_cut, &dwell)?;
+    }
     let last = root_cut.len() - 1;
-    let (r, t) = place(&[root_cut[last], root_out], &[tip_cut[last], tip_out]);
+    let (root_lead_out, tip_lead_out) =
+        (vec![root_cut[last], root_out], vec![tip_cut[last], tip_out]);
+    let (r, t) = place(&root_lead_out, &tip_lead_out);
     let lead_out = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
     for (what, m) in [
         ("lead-in", &lead_in),
@@ -315,8 +394,12 @@ pub fn plan_observed(
     ] {
         check_envelope(&job.machine, four_axis, what, m)?;
     }
+    root.lead_in = vec![root_out, root_cut[0]];
+    root.lead_out = root_lead_out;
     root.optimised = root_cut;
     if let Some(t) = tip_plan.as_mut() {
+        t.lead_in = vec![tip_out, tip_cut[0]];
+        t.lead_out = tip_lead_out;
         t.optimised = tip_cut;
     }
     Ok(HotwirePlan {
@@ -365,26 +448,67 @@ fn synchronised(
     })
 }
 
+/// `values` (one per point of `path`) as a function of normalised arc length along `path`,
+/// linearly interpolated.
+fn arc_profile<'a>(path: &[Point2<f64>], values: &'a [f64]) -> impl Fn(f64) -> f64 + 'a {
+    let from = normalised_arc(path);
+    move |u: f64| {
+        let j = from.partition_point(|&v| v < u).clamp(1, from.len() - 1);
+        let (u0, u1) = (from[j - 1], from[j]);
+        let t = if u1 > u0 {
+            ((u - u0) / (u1 - u0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        values[j - 1] + t * (values[j] - values[j - 1])
+    }
+}
+
+/// Normalised arc length at each point of `path`, 0 … 1.
+fn normalised_arc(path: &[Point2<f64>]) -> Vec<f64> {
+    let mut s = vec![0.0];
+    for w in path.windows(2) {
+        s.push(s[s.len() - 1] + (w[1] - w[0]).norm());
+    }
+    let total = s[s.len() - 1].max(f64::MIN_POSITIVE);
+    s.iter().map(|v| v / total).collect()
+}
+
 /// `values` (one per point of `path`) carried onto `onto` (points lying on `path`) by
 /// normalised arc length, linearly interpolated.
 fn along_arc(path: &[Point2<f64>], values: &[f64], onto: &[Point2<f64>]) -> Vec<f64> {
-    let arc = |p: &[Point2<f64>]| {
-        let mut s = vec![0.0];
-        for w in p.windows(2) {
-            s.push(s[s.len() - 1] + (w[1] - w[0]).norm());
-        }
-        let total = s[s.len() - 1].max(f64::MIN_POSITIVE);
-        s.iter().map(|v| v / total).collect::<Vec<f64>>()
-    };
-    let (from, to) = (arc(path), arc(onto));
-    to.iter()
-        .map(|&u| {
-            let j = from.partition_point(|&v| v < u).clamp(1, from.len() - 1);
-            let (u0, u1) = (from[j - 1], from[j]);
-            let t = if u1 > u0 { (u - u0) / (u1 - u0) } else { 0.0 };
-            values[j - 1] + t * (values[j] - values[j - 1])
+    let profile = arc_profile(path, values);
+    normalised_arc(onto).into_iter().map(profile).collect()
+}
+
+/// Each move's speed relative to the constant-feed cut, as a ratio per point (point 0 takes
+/// move 0's): the faster face's length over the move's duration (the farther carriage's
+/// distance over its feed) over the nominal feed.
+fn dwell_ratios(
+    root: &[Point2<f64>],
+    tip: &[Point2<f64>],
+    cut: &super::Motion,
+    feed_mm_s: f64,
+) -> Vec<f64> {
+    let moves: Vec<f64> = (1..cut.len())
+        .map(|k| {
+            let carriage = (cut.xy[k] - cut.xy[k - 1])
+                .norm()
+                .max((cut.uv[k] - cut.uv[k - 1]).norm());
+            let face = (root[k] - root[k - 1])
+                .norm()
+                .max((tip[k] - tip[k - 1]).norm());
+            if carriage > 0.0 && face > 0.0 {
+                face / (carriage / cut.feed_mm_s[k]) / feed_mm_s
+            } else {
+                1.0
+            }
         })
-        .collect()
+        .collect();
+    let mut out = Vec::with_capacity(cut.len());
+    out.push(moves.first().copied().unwrap_or(1.0));
+    out.extend(moves);
+    out
 }
 
 /// Recomputes a section's optimised exposure and statistics along `path` (the resampled path
@@ -392,6 +516,7 @@ fn along_arc(path: &[Point2<f64>], values: &[f64], onto: &[Point2<f64>]) -> Vec<
 fn refresh_exposure(
     job: &HotwireJob,
     section: &mut SectionPlan,
+    foil: &Airfoil,
     path: &[Point2<f64>],
     ratios: &[f64],
 ) -> Result<(), JobError> {
@@ -408,6 +533,21 @@ fn refresh_exposure(
         .model
         .exposure_into(&panels, &wire, &mut section.optimised_exposure)
         .map_err(wrap)?;
+    if job.lead_in_mm > 0.0 {
+        // The lead-in's heat reaches every panel (as in `Problem::with_lead_in`).
+        let start = lead_in_start(foil, job.lead_in_mm, section.offset_mm);
+        let lead = crate::exposure::WireSegments::from_points(&[start, path[0]]).map_err(wrap)?;
+        let mut extra = vec![0.0; panels.len()];
+        ExposureModel {
+            causal: crate::exposure::Causal::Off,
+            ..job.objective.model
+        }
+        .exposure_into(&panels, &lead, &mut extra)
+        .map_err(wrap)?;
+        for (e, x) in section.optimised_exposure.iter_mut().zip(&extra) {
+            *e += x;
+        }
+    }
     section.optimised_stats = ExposureStats::of(&section.optimised_exposure, section.cse);
     Ok(())
 }

@@ -4,6 +4,7 @@
 use cell_profiles::MachineProfile;
 
 use crate::pso::{Objective, PsoConfig};
+use crate::refine::RefineConfig;
 use crate::wing::Placement;
 
 use super::{AirfoilSource, JobError, JobParameter};
@@ -94,6 +95,8 @@ pub struct HotwireJob {
     pub objective: Objective,
     /// Swarm settings; its `seed` is overridden by [`HotwireJob::seed`].
     pub pso: PsoConfig,
+    /// Local refinement after the swarm ([`crate::refine`]; `iterations: 0` switches it off).
+    pub refine: RefineConfig,
     /// RNG seed; the same seed gives the same plan.
     pub seed: u64,
     /// Cutting feed of the faster foam face (mm/s).
@@ -125,6 +128,7 @@ impl Default for HotwireJob {
             path_points: 0,
             objective: Objective::default(),
             pso: PsoConfig::default(),
+            refine: RefineConfig::default(),
             seed: 0,
             feed_mm_s: 15.0,
             lead_in_mm: 10.0,

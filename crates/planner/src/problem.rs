@@ -1,0 +1,650 @@
+//! The optimisation problem of seed 000 §IV.C: the foil, its surface panels, the wire path
+//! parameterised by a cubic B-spline of normal displacements, the feed along it, the lead-in,
+//! and the loss every optimiser ([`crate::pso`], [`crate::refine`]) minimises.
+//!
+//! The design variables are K control values c of a cubic B-spline that moves the
+//! fixed-offset baseline along its normals ([`crate::trajectory::Trajectory`]) and, with
+//! [`Objective::feed`], K_f control values g of the spline of ln ρ, the feed ratio along the
+//! path ([`FeedVariable`]). The loss is
+//!
+//! L(c, g) = (1/N) Σᵢ (Êᵢ(c, g) − CSE)² + λ Σₖ (c_{k+1} − c_k)² + λ Σₖ (g_{k+1} − g_k)² + μ Σₖ g_k²,
+//!
+//! the first term the paper's (an unweighted mean over the N surface panels, in the exposure
+//! unit of [`crate::exposure`] squared; Êᵢ includes the lead-in's heat,
+//! [`Problem::with_lead_in`]), the next two a smoothing penalty (the paper applies "a
+//! smoothing" without saying which; λ = [`Objective::smoothing`] in exposure-unit²/mm²; the
+//! sums wrap round with periodic spline ends), the last a pull towards the nominal feed
+//! (μ = [`FeedVariable::nominal_weight`]). Subject to T ∩ G = ∅: a trajectory or lead-in that
+//! crosses the foil or comes closer than [`Objective::min_clearance_mm`] has L = +∞ and is
+//! never a best.
+//!
+//! Not here: the paper's CSE calibration (§IV.D) needs cut parts measured; this crate has no
+//! model of the cut chord from the exposure, so no `calibrate_cse` is offered.
+
+use nalgebra::Point2;
+
+use crate::airfoil::Airfoil;
+use crate::exposure::{ExposureModel, Panels, WireSegments};
+use crate::pso::PsoError;
+use crate::spline::SplineEnds;
+use crate::trajectory::{is_feasible, Baseline, ControlSpacing, OutlineGrid, Trajectory};
+
+/// What the optimiser minimises (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Objective {
+    /// Exposure model settings.
+    pub model: ExposureModel,
+    /// Target exposure CSE in the model's unit (dimensionless for the paper's 1/‖R‖, mm⁻¹ for
+    /// 1/‖R‖²). `None` (default): the baseline's mean exposure, i.e. "make the exposure as
+    /// uniform as possible at the level the usual practice gives".
+    pub cse: Option<f64>,
+    /// Smoothing weight λ on Σ (c_{k+1} − c_k)² (default 1e-3: negligible against a typical
+    /// exposure residual, enough to stop neighbouring controls fighting).
+    pub smoothing: f64,
+    /// Least allowed distance between trajectory and foil, mm (default 0.1).
+    pub min_clearance_mm: f64,
+    /// Number of spline control values K (default 32, as in the notes).
+    pub control_points: usize,
+    /// End condition of the path and feed splines (default [`SplineEnds::Open`]: the first
+    /// panels cut want the wire close and slow, the last ones far and fast, and a periodic
+    /// spline ties the two together at the entry point; [`SplineEnds::Periodic`] is the
+    /// paper's closed path).
+    pub ends: SplineEnds,
+    /// Where the path and feed controls act along the path (default
+    /// [`ControlSpacing::PathPoints`]: clustered at the leading and trailing edges).
+    pub spacing: ControlSpacing,
+    /// Feed along the path as a second set of design variables (default: on, within
+    /// [`FeedVariable::default`]'s band; `None`: constant feed, the paper's experiments). The
+    /// wire cannot come closer than the clearance where the surface is under-exposed (the
+    /// leading edge), and it cannot move far enough out to take the excess off the last
+    /// panels cut; dwell time can do both (crate docs, "Why the swarm stalled").
+    pub feed: Option<FeedVariable>,
+}
+
+impl Default for Objective {
+    fn default() -> Self {
+        Self {
+            model: ExposureModel::default(),
+            cse: None,
+            smoothing: 1e-3,
+            min_clearance_mm: 0.1,
+            control_points: 32,
+            ends: SplineEnds::Open,
+            spacing: ControlSpacing::PathPoints,
+            feed: Some(FeedVariable::default()),
+        }
+    }
+}
+
+/// Feed along the path as an optimisation variable: seed 000 writes the exposure as Ê(c, f)
+/// without defining f (ambiguity 5 of `docs/notes/swarmcut-model-notes.md`); here f is the feed.
+///
+/// The feed ratio ρ(u) = feed / nominal feed is a cubic B-spline of ln ρ (ends as [`Objective::ends`]) over the
+/// path's spline parameter u ([`Objective::spacing`]), clamped to [`FeedVariable::min_ratio`],
+/// [`FeedVariable::max_ratio`]. At a constant wire power a slower wire heats the surface
+/// longer, so wire segment j's exposure is weighted by 1/ρ(uⱼ) (its dwell time per mm relative
+/// to the nominal, [`crate::exposure::WireSegments::set_weights`]). The plan then holds the
+/// wire current constant: a constant-kerf schedule would cancel exactly this effect.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FeedVariable {
+    /// Control values of the ln ρ spline (default 16).
+    pub control_points: usize,
+    /// Slowest feed as a fraction of the nominal (default 0.5).
+    pub min_ratio: f64,
+    /// Fastest feed as a fraction of the nominal (default 1.5).
+    pub max_ratio: f64,
+    /// Weight μ of Σ (ln ρ_k)² in the loss, exposure-unit² (default 1e-3): the feed leaves the
+    /// nominal only where that evens the exposure out. Without it the optimum trades a slower
+    /// feed everywhere for a wire moved millimetres out, which the exposure cannot tell apart
+    /// but the cut's time and the kerf model can.
+    pub nominal_weight: f64,
+}
+
+impl Default for FeedVariable {
+    fn default() -> Self {
+        Self {
+            control_points: 16,
+            min_ratio: 0.5,
+            max_ratio: 1.5,
+            nominal_weight: 1e-3,
+        }
+    }
+}
+
+impl FeedVariable {
+    /// This band within what the machine can do: the fastest ratio at most
+    /// `max_feed_mm_s / feed_mm_s` (the slowest one no faster than that).
+    pub fn within_machine(self, feed_mm_s: f64, max_feed_mm_s: f64) -> Self {
+        let max_ratio = self.max_ratio.min(max_feed_mm_s / feed_mm_s);
+        Self {
+            max_ratio,
+            min_ratio: self.min_ratio.min(max_ratio),
+            ..self
+        }
+    }
+
+    /// ρ(u) for the ln ρ spline `controls` with end condition `ends` (module docs of
+    /// [`FeedVariable`]).
+    pub fn ratio(&self, ends: SplineEnds, controls: &[f64], u: f64) -> f64 {
+        ends.eval(controls, u)
+            .exp()
+            .clamp(self.min_ratio, self.max_ratio)
+    }
+}
+
+/// A fixed problem: foil, surface panels, parameterised trajectory and objective.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// The foil outline G, bucketed for the per-evaluation feasibility test.
+    pub(crate) grid: OutlineGrid,
+    /// The baseline's clearance from G less the required clearance (mm): a path no point of
+    /// which moves further than this from the baseline is feasible without a test.
+    pub(crate) free_displacement_mm: f64,
+    surface: Panels,
+    trajectory: Trajectory,
+    pub(crate) objective: Objective,
+    cse: f64,
+    /// Normalised baseline arc length at each wire segment's middle (for the feed spline).
+    segment_u: Vec<f64>,
+    /// Where the lead-in starts; it runs straight to the path's first point (which moves with
+    /// the controls). `None`: the wire starts on the path (the paper's set-up).
+    lead_in_start: Option<Point2<f64>>,
+    /// The model with the causal mask off, for the lead-in: the wire is on it before it cuts
+    /// any panel, so all of it counts for every panel.
+    lead_model: ExposureModel,
+    /// A feed ratio per wire segment set from outside ([`Problem::with_feed_profile`]), used
+    /// when the feed is not a design variable.
+    fixed_feed: Option<Vec<f64>>,
+}
+
+/// Reusable buffers for one loss evaluation (no allocation per evaluation once warm).
+#[derive(Debug, Clone, Default)]
+pub struct Scratch {
+    path: Vec<Point2<f64>>,
+    wire: WireSegments,
+    exposure: Vec<f64>,
+    weights: Vec<f64>,
+    lead: [Point2<f64>; 2],
+    lead_wire: WireSegments,
+    lead_exposure: Vec<f64>,
+    regularisation: Vec<f64>,
+}
+
+impl Problem {
+    /// Sets up the problem: G = `foil` (its full-resolution points, for feasibility), the
+    /// surface = `foil` resampled to `surface_panels` points ([`Airfoil::resampled_cosine`]),
+    /// the trajectory = `baseline` with [`Objective::control_points`] controls, and CSE
+    /// resolved (the baseline mean exposure when [`Objective::cse`] is `None`).
+    ///
+    /// # Errors
+    /// Invalid objective values (named); a baseline closer than the clearance.
+    pub fn new(
+        foil: &Airfoil,
+        surface_panels: usize,
+        baseline: Baseline,
+        objective: Objective,
+    ) -> Result<Self, PsoError> {
+        objective.model.validate()?;
+        for (name, v) in [
+            ("smoothing", objective.smoothing),
+            ("min_clearance_mm", objective.min_clearance_mm),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(PsoError::InvalidParameter {
+                    name,
+                    value: v,
+                    requirement: "finite and >= 0",
+                });
+            }
+        }
+        if let Some(f) = objective.feed {
+            if !(f.min_ratio.is_finite()
+                && f.min_ratio > 0.0
+                && f.max_ratio.is_finite()
+                && f.max_ratio >= f.min_ratio)
+            {
+                return Err(PsoError::InvalidParameter {
+                    name: "feed.min_ratio",
+                    value: f.min_ratio,
+                    requirement: "0 < min_ratio <= max_ratio, both finite",
+                });
+            }
+            if !(f.nominal_weight.is_finite() && f.nominal_weight >= 0.0) {
+                return Err(PsoError::InvalidParameter {
+                    name: "feed.nominal_weight",
+                    value: f.nominal_weight,
+                    requirement: "finite and >= 0",
+                });
+            }
+            if f.control_points == 0 {
+                return Err(PsoError::InvalidParameter {
+                    name: "feed.control_points",
+                    value: 0.0,
+                    requirement: ">= 1",
+                });
+            }
+        }
+        if let Some(c) = objective.cse {
+            if !c.is_finite() {
+                return Err(PsoError::InvalidParameter {
+                    name: "cse",
+                    value: c,
+                    requirement: "finite",
+                });
+            }
+        }
+        let outline = foil.points().to_vec();
+        if !is_feasible(baseline.points(), &outline, objective.min_clearance_mm) {
+            return Err(PsoError::InfeasibleBaseline {
+                clearance_mm: crate::trajectory::clearance_mm(
+                    baseline.points(),
+                    &outline,
+                    f64::INFINITY,
+                ),
+            });
+        }
+        let surface = Panels::from_points(foil.resampled_cosine(surface_panels)?.points())?;
+        // The clearance is ≥ the required one (checked above); 1e-9 mm for rounding.
+        let free_displacement_mm =
+            crate::trajectory::clearance_mm(baseline.points(), &outline, f64::INFINITY)
+                - objective.min_clearance_mm
+                - 1e-9;
+        let trajectory = Trajectory::with_ends(
+            baseline,
+            objective.control_points,
+            objective.ends,
+            objective.spacing,
+        )?;
+        // The feed spline's parameter at each wire segment's middle.
+        let segment_u = trajectory
+            .parameters()
+            .windows(2)
+            .map(|w| 0.5 * (w[0] + w[1]))
+            .collect();
+        let mut p = Self {
+            grid: OutlineGrid::new(&outline),
+            free_displacement_mm,
+            surface,
+            trajectory,
+            objective,
+            cse: 0.0,
+            segment_u,
+            lead_in_start: None,
+            fixed_feed: None,
+            lead_model: ExposureModel {
+                causal: crate::exposure::Causal::Off,
+                ..objective.model
+            },
+        };
+        p.resolve_cse()?;
+        Ok(p)
+    }
+
+    /// The same problem with a straight lead-in from `start` to the path's first point: its
+    /// heat counts for every panel (the wire is on it before it cuts anything), so the first
+    /// panels cut are not starved of exposure. CSE is resolved again when it is the baseline's
+    /// mean. The lead-in must keep the clearance from the foil like the path.
+    ///
+    /// # Errors
+    /// A non-finite `start`; a baseline lead-in closer to the foil than the clearance.
+    pub fn with_lead_in(mut self, start: Point2<f64>) -> Result<Self, PsoError> {
+        if !(start.x.is_finite() && start.y.is_finite()) {
+            return Err(PsoError::InvalidParameter {
+                name: "lead_in_start",
+                value: f64::NAN,
+                requirement: "finite",
+            });
+        }
+        let lead = [start, self.trajectory.baseline().points()[0]];
+        if !self
+            .grid
+            .is_feasible(&lead, self.objective.min_clearance_mm)
+        {
+            return Err(PsoError::InfeasibleBaseline {
+                clearance_mm: crate::trajectory::clearance_mm(
+                    &lead,
+                    self.grid.outline(),
+                    f64::INFINITY,
+                ),
+            });
+        }
+        self.lead_in_start = Some(start);
+        self.resolve_cse()?;
+        Ok(self)
+    }
+
+    /// The same problem with the feed along the path given rather than optimised: segment j
+    /// runs at `ratio(u_j)` × the nominal feed, u_j the baseline's normalised arc length at the
+    /// segment's middle (the tip face
+    /// of a tapered panel, which moves in step with the root's optimised feed). Ignored while
+    /// the feed is a design variable. CSE is resolved again when it is the baseline's mean.
+    ///
+    /// # Errors
+    /// A ratio that is not finite and > 0 (named `feed_profile[j]`).
+    pub fn with_feed_profile(mut self, ratio: impl Fn(f64) -> f64) -> Result<Self, PsoError> {
+        let ratios: Vec<f64> = self
+            .trajectory
+            .baseline()
+            .arc_positions()
+            .windows(2)
+            .map(|w| ratio(0.5 * (w[0] + w[1])))
+            .collect();
+        if let Some(j) = ratios.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+            return Err(PsoError::InvalidParameter {
+                name: "feed_profile",
+                value: ratios[j],
+                requirement: "finite and > 0 at every segment",
+            });
+        }
+        self.fixed_feed = Some(ratios);
+        self.resolve_cse()?;
+        Ok(self)
+    }
+
+    /// The lead-in's start, if the problem has one ([`Problem::with_lead_in`]).
+    pub fn lead_in_start(&self) -> Option<Point2<f64>> {
+        self.lead_in_start
+    }
+
+    /// CSE = the objective's, else the baseline's mean exposure.
+    fn resolve_cse(&mut self) -> Result<(), PsoError> {
+        self.cse = match self.objective.cse {
+            Some(c) => c,
+            None => {
+                let e = self.exposure(&vec![0.0; self.dimension()])?;
+                e.iter().sum::<f64>() / e.len() as f64
+            }
+        };
+        Ok(())
+    }
+
+    /// The resolved CSE target.
+    pub fn cse(&self) -> f64 {
+        self.cse
+    }
+
+    /// The objective settings.
+    pub fn objective(&self) -> &Objective {
+        &self.objective
+    }
+
+    /// The surface panels.
+    pub fn surface(&self) -> &Panels {
+        &self.surface
+    }
+
+    /// The parameterised trajectory.
+    pub fn trajectory(&self) -> &Trajectory {
+        &self.trajectory
+    }
+
+    /// Number of design variables: the K path controls, then the feed controls if the feed
+    /// is a variable ([`Objective::feed`]).
+    pub fn dimension(&self) -> usize {
+        self.trajectory.control_points() + self.objective.feed.map_or(0, |f| f.control_points)
+    }
+
+    /// Box bounds (lower, upper) on the design variables that every optimiser keeps to:
+    ///
+    /// - a path control ≥ −(baseline clearance − required clearance): the spline's weights are
+    ///   ≥ 0 and sum to 1, so no point then moves further inwards than that and the path keeps
+    ///   the clearance wherever the baseline's normals point away from the foil. Not needed for
+    ///   feasibility (the loss tests it), but the optimum presses against it (the leading edge
+    ///   wants the wire as close as it may come), and a swarm or a Gauss–Newton step that knows
+    ///   the bound slides along it instead of wasting its moves on infeasible points. No upper
+    ///   bound;
+    /// - a feed control within [ln min_ratio, ln max_ratio]: ρ = exp(spline) stays in the
+    ///   feed band for the same reason.
+    pub fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
+        let k = self.trajectory.control_points();
+        let inward = self.free_displacement_mm.max(0.0);
+        let mut lower = vec![-inward; k];
+        let mut upper = vec![f64::INFINITY; k];
+        if let Some(f) = self.objective.feed {
+            lower.extend(std::iter::repeat_n(f.min_ratio.ln(), f.control_points));
+            upper.extend(std::iter::repeat_n(f.max_ratio.ln(), f.control_points));
+        }
+        (lower, upper)
+    }
+
+    /// The wire path for the design vector `controls` (its first K values).
+    pub fn path(&self, controls: &[f64]) -> Vec<Point2<f64>> {
+        self.trajectory.path(controls)
+    }
+
+    /// The feed ratio ρ of each wire segment for `controls` (all 1 without a feed variable).
+    pub fn feed_ratios(&self, controls: &[f64]) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.feed_ratios_into(controls, &mut out);
+        out
+    }
+
+    fn feed_ratios_into(&self, controls: &[f64], out: &mut Vec<f64>) {
+        out.clear();
+        let k = self.trajectory.control_points();
+        match self.objective.feed {
+            Some(f) if controls.len() > k => {
+                let ends = self.objective.ends;
+                out.extend(
+                    self.segment_u
+                        .iter()
+                        .map(|&u| f.ratio(ends, &controls[k..], u)),
+                )
+            }
+            _ => match &self.fixed_feed {
+                Some(ratios) => out.extend_from_slice(ratios),
+                None => out.resize(self.segment_u.len(), 1.0),
+            },
+        }
+    }
+
+    /// The exposure weight of each wire segment for `controls`: its dwell time relative to the
+    /// nominal feed, 1/ρ ([`FeedVariable`]).
+    fn feed_weights_into(&self, controls: &[f64], out: &mut Vec<f64>) {
+        self.feed_ratios_into(controls, out);
+        for w in out.iter_mut() {
+            *w = 1.0 / *w;
+        }
+    }
+
+    /// The wire segments of `controls`' path, weighted by the feed (1/ρ per segment).
+    ///
+    /// # Errors
+    /// A degenerate path (non-finite controls).
+    pub fn wire(&self, controls: &[f64]) -> Result<WireSegments, PsoError> {
+        let mut wire = WireSegments::from_points(&self.path(controls))?;
+        let mut weights = Vec::new();
+        self.feed_weights_into(controls, &mut weights);
+        wire.set_weights(&weights)?;
+        Ok(wire)
+    }
+
+    /// True if the path for `controls` satisfies T ∩ G = ∅ with the clearance.
+    pub fn is_feasible(&self, controls: &[f64]) -> bool {
+        self.grid
+            .is_feasible(&self.path(controls), self.objective.min_clearance_mm)
+    }
+
+    /// Exposure of every surface panel for `controls`, the lead-in's heat included.
+    ///
+    /// # Errors
+    /// A degenerate path (non-finite controls).
+    pub fn exposure(&self, controls: &[f64]) -> Result<Vec<f64>, PsoError> {
+        let wire = self.wire(controls)?;
+        let mut out = vec![0.0; self.surface.len()];
+        self.objective
+            .model
+            .exposure_into(&self.surface, &wire, &mut out)?;
+        if let Some(start) = self.lead_in_start {
+            let lead = WireSegments::from_points(&[start, self.path(controls)[0]])?;
+            let mut extra = vec![0.0; out.len()];
+            self.lead_model
+                .exposure_into(&self.surface, &lead, &mut extra)?;
+            for (e, x) in out.iter_mut().zip(&extra) {
+                *e += x;
+            }
+        }
+        Ok(out)
+    }
+
+    /// Every wire segment's contribution to every panel for `controls`, feed-weighted:
+    /// `(rows = segments, cols = panels, values)` as [`ExposureModel::exposure_matrix`].
+    ///
+    /// # Errors
+    /// A degenerate path (non-finite controls).
+    pub fn exposure_matrix(&self, controls: &[f64]) -> Result<(usize, usize, Vec<f32>), PsoError> {
+        Ok(self
+            .objective
+            .model
+            .exposure_matrix_of(&self.surface, &self.wire(controls)?)?)
+    }
+
+    /// T ∩ G = ∅ with the clearance for `path` = the trajectory of `controls`, answered
+    /// without geometry when no path point moves further from the baseline than
+    /// `free_displacement_mm` (a point of a path segment is then within that distance of the
+    /// baseline segment's corresponding point, so the clearance cannot drop below the
+    /// required one): first by the largest control value (the B-spline's weights are ≥ 0 and
+    /// sum to 1, so no displacement exceeds it), then by the largest displacement itself; else
+    /// by the outline grid ([`OutlineGrid::is_feasible`]).
+    pub(crate) fn is_clear(&self, controls: &[f64], path: &[Point2<f64>]) -> bool {
+        let free = self.free_displacement_mm;
+        let k = self.trajectory.control_points().min(controls.len());
+        if free > 0.0 {
+            if controls[..k].iter().all(|c| c.abs() < free) {
+                return true;
+            }
+            let base = self.trajectory.baseline().points();
+            if path.len() == base.len()
+                && path
+                    .iter()
+                    .zip(base)
+                    .all(|(p, b)| (p - b).norm_squared() < free * free)
+            {
+                return true;
+            }
+        }
+        self.grid.is_feasible(path, self.objective.min_clearance_mm)
+    }
+
+    /// Fills `scratch.exposure` with the exposure of `controls`' path (lead-in included) and
+    /// returns true, or returns false for an infeasible or degenerate path or non-finite
+    /// controls. Allocates nothing once `scratch` is warm; the feasibility test needs no
+    /// geometry while the path stays near the baseline, else visits only the outline near the
+    /// path ([`OutlineGrid`]), and the exposure takes the model's fast path when it has one
+    /// ([`ExposureModel::exposure_into`]).
+    pub fn evaluate(&self, controls: &[f64], scratch: &mut Scratch) -> bool {
+        if controls.iter().any(|c| !c.is_finite()) {
+            return false;
+        }
+        self.trajectory.path_into(controls, &mut scratch.path);
+        if !self.is_clear(controls, &scratch.path) || scratch.wire.set(&scratch.path).is_err() {
+            return false;
+        }
+        if self.objective.feed.is_some() || self.fixed_feed.is_some() {
+            self.feed_weights_into(controls, &mut scratch.weights);
+            if scratch.wire.set_weights(&scratch.weights).is_err() {
+                return false;
+            }
+        }
+        scratch.exposure.resize(self.surface.len(), 0.0);
+        if self
+            .objective
+            .model
+            .exposure_into(&self.surface, &scratch.wire, &mut scratch.exposure)
+            .is_err()
+        {
+            return false;
+        }
+        if let Some(start) = self.lead_in_start {
+            scratch.lead = [start, scratch.path[0]];
+            if !self
+                .grid
+                .is_feasible(&scratch.lead, self.objective.min_clearance_mm)
+                || scratch.lead_wire.set(&scratch.lead).is_err()
+            {
+                return false;
+            }
+            scratch.lead_exposure.resize(self.surface.len(), 0.0);
+            if self
+                .lead_model
+                .exposure_into(
+                    &self.surface,
+                    &scratch.lead_wire,
+                    &mut scratch.lead_exposure,
+                )
+                .is_err()
+            {
+                return false;
+            }
+            for (e, x) in scratch.exposure.iter_mut().zip(&scratch.lead_exposure) {
+                *e += x;
+            }
+        }
+        true
+    }
+
+    /// The regularisation residuals, appended to `out`: √λ·(c_{k+1} − c_k) for neighbouring
+    /// path controls and, separately, feed controls (cyclic pairs with periodic spline ends,
+    /// consecutive ones with open ends, where the first and last pass are meant to differ),
+    /// then √μ·c_k for every feed control (ln ρ: the feed stays nominal unless moving it evens
+    /// the exposure out; μ = [`FeedVariable::nominal_weight`]).
+    fn regularisation_into(&self, controls: &[f64], out: &mut Vec<f64>) {
+        let root = self.objective.smoothing.sqrt();
+        let cyclic = self.objective.ends == SplineEnds::Periodic;
+        let k = self.trajectory.control_points().min(controls.len());
+        for c in [&controls[..k], &controls[k..]] {
+            let m = c.len();
+            let pairs = if cyclic { m } else { m.saturating_sub(1) };
+            out.extend((0..pairs).map(|i| root * (c[(i + 1) % m] - c[i])));
+        }
+        if let Some(f) = self.objective.feed {
+            let root = f.nominal_weight.sqrt();
+            out.extend(controls[k..].iter().map(|c| root * c));
+        }
+    }
+
+    /// The loss L(c) (module docs); +∞ for an infeasible or degenerate path or non-finite
+    /// controls ([`Problem::evaluate`]).
+    pub fn loss(&self, controls: &[f64], scratch: &mut Scratch) -> f64 {
+        if !self.evaluate(controls, scratch) {
+            return f64::INFINITY;
+        }
+        let n = scratch.exposure.len() as f64;
+        let fit = scratch
+            .exposure
+            .iter()
+            .map(|e| (e - self.cse).powi(2))
+            .sum::<f64>()
+            / n;
+        let mut reg = std::mem::take(&mut scratch.regularisation);
+        reg.clear();
+        self.regularisation_into(controls, &mut reg);
+        let l = fit + reg.iter().map(|r| r * r).sum::<f64>();
+        scratch.regularisation = reg;
+        if l.is_nan() {
+            f64::INFINITY
+        } else {
+            l
+        }
+    }
+
+    /// The residuals r with ‖r‖² = L(c), into `out`: (Eᵢ − CSE)/√N for every panel, then the
+    /// regularisation's (module docs). False where L = +∞.
+    pub fn residuals_into(
+        &self,
+        controls: &[f64],
+        scratch: &mut Scratch,
+        out: &mut Vec<f64>,
+    ) -> bool {
+        if !self.evaluate(controls, scratch) {
+            return false;
+        }
+        let scale = (scratch.exposure.len() as f64).sqrt().recip();
+        out.clear();
+        out.extend(scratch.exposure.iter().map(|e| (e - self.cse) * scale));
+        self.regularisation_into(controls, out);
+        out.iter().all(|r| r.is_finite())
+    }
+}
