@@ -34,6 +34,9 @@ use clap::Args;
 use crate::exit::{failure, usage};
 use serde::Serialize;
 
+/// The current band `--vary-current` allows, as fractions of the nominal current.
+const VARIED_CURRENT_BAND: (f64, f64) = (0.7, 1.3);
+
 /// `cell hotwire` options.
 #[derive(Args, Debug)]
 pub struct HotwireArgs {
@@ -85,6 +88,10 @@ pub struct HotwireArgs {
     /// constant current; slower where the surface needs more heat).
     #[arg(long)]
     pub constant_feed: bool,
+    /// Let the wire current vary along the path too (0.7–1.3 × the nominal, within the
+    /// supply), where the feed alone cannot give the heat the surface needs.
+    #[arg(long, conflicts_with = "constant_feed")]
+    pub vary_current: bool,
     /// Accepted for older scripts: the feed is a design variable by default now.
     #[arg(long, hide = true)]
     pub optimise_feed: bool,
@@ -235,7 +242,14 @@ pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
         feed_mm_s: a.feed.unwrap_or(defaults.feed_mm_s),
         panels: a.panels.unwrap_or(defaults.panels),
         objective: cell_planner::pso::Objective {
-            feed: (!a.constant_feed).then(cell_planner::pso::FeedVariable::default),
+            feed: (!a.constant_feed).then(|| {
+                let feed = cell_planner::pso::FeedVariable::default();
+                if a.vary_current {
+                    feed.with_current_band(VARIED_CURRENT_BAND)
+                } else {
+                    feed
+                }
+            }),
             ..defaults.objective
         },
         pso: PsoConfig {

@@ -80,16 +80,21 @@ impl Default for Objective {
 /// Feed along the path as an optimisation variable: seed 000 writes the exposure as Ê(c, f)
 /// without defining f (ambiguity 5 of `docs/notes/swarmcut-model-notes.md`); here f is the feed.
 ///
-/// The feed ratio ρ(u) = feed / nominal feed is a cubic B-spline of ln ρ (ends as [`Objective::ends`]) over the
-/// path's spline parameter u ([`Objective::spacing`]), clamped to [`FeedVariable::min_ratio`],
-/// [`FeedVariable::max_ratio`]. At a constant wire power a slower wire heats the surface
-/// longer, so wire segment j's exposure is weighted by 1/ρ(uⱼ) (its dwell time per mm relative
-/// to the nominal, [`crate::exposure::WireSegments::set_weights`]). The plan then holds the
-/// wire current constant: a constant-kerf schedule would cancel exactly this effect.
+/// The wire's heat per millimetre of path relative to the nominal cut, q(u), is what the
+/// exposure sees: segment j's contribution is weighted by q(uⱼ)
+/// ([`crate::exposure::WireSegments::set_weights`]). Heat per millimetre is power × dwell,
+/// so q = γ²/ρ with ρ = feed / nominal feed and γ = current / nominal current (the wire's
+/// power ∝ I²R). The design variables are a cubic B-spline s(u) = −ln q (ends as
+/// [`Objective::ends`]) over the path's spline parameter u ([`Objective::spacing`]),
+/// realised feed first: ρ = e^s clamped to [`FeedVariable::min_ratio`] …
+/// [`FeedVariable::max_ratio`], then γ = √(q·ρ) clamped to
+/// [`FeedVariable::min_current_ratio`] … [`FeedVariable::max_current_ratio`] (default 1 … 1:
+/// constant current, and s is simply ln ρ). Either way the plan drops the constant-kerf
+/// current schedule, which would cancel exactly this effect.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FeedVariable {
-    /// Control values of the ln ρ spline (default 16).
+    /// Control values of the s = −ln q spline (default 16).
     pub control_points: usize,
     /// Slowest feed as a fraction of the nominal (default 0.5).
     pub min_ratio: f64,
@@ -100,6 +105,13 @@ pub struct FeedVariable {
     /// feed everywhere for a wire moved millimetres out, which the exposure cannot tell apart
     /// but the cut's time and the kerf model can.
     pub nominal_weight: f64,
+    /// Lowest wire current as a fraction of the nominal (default 1.0: constant current).
+    pub min_current_ratio: f64,
+    /// Highest wire current as a fraction of the nominal (default 1.0). A wider band lets
+    /// the heat leave the feed's band (`cell hotwire --vary-current`); off by default because
+    /// the wire's temperature lags a current step by a fraction of a second, which the
+    /// exposure model does not describe.
+    pub max_current_ratio: f64,
 }
 
 impl Default for FeedVariable {
@@ -109,6 +121,8 @@ impl Default for FeedVariable {
             min_ratio: 0.5,
             max_ratio: 1.5,
             nominal_weight: 1e-3,
+            min_current_ratio: 1.0,
+            max_current_ratio: 1.0,
         }
     }
 }
@@ -125,12 +139,47 @@ impl FeedVariable {
         }
     }
 
-    /// ρ(u) for the ln ρ spline `controls` with end condition `ends` (module docs of
+    /// This variable with the current free within `(min, max)` × the nominal current.
+    pub fn with_current_band(self, (min, max): (f64, f64)) -> Self {
+        Self {
+            min_current_ratio: min,
+            max_current_ratio: max,
+            ..self
+        }
+    }
+
+    /// The current band within the supply: γ at most `max_a / current_a` and at least
+    /// `min_a / current_a` (kept ordered).
+    pub fn within_supply(self, current_a: f64, min_a: f64, max_a: f64) -> Self {
+        let max_current_ratio = self.max_current_ratio.min(max_a / current_a);
+        let min_current_ratio = self
+            .min_current_ratio
+            .max(min_a / current_a)
+            .min(max_current_ratio);
+        Self {
+            min_current_ratio,
+            max_current_ratio: max_current_ratio.max(min_current_ratio),
+            ..self
+        }
+    }
+
+    /// (ρ, γ) at u for the s spline `controls` with end condition `ends` (module docs of
     /// [`FeedVariable`]).
-    pub fn ratio(&self, ends: SplineEnds, controls: &[f64], u: f64) -> f64 {
-        ends.eval(controls, u)
-            .exp()
-            .clamp(self.min_ratio, self.max_ratio)
+    pub fn setting(&self, ends: SplineEnds, controls: &[f64], u: f64) -> (f64, f64) {
+        let s = ends.eval(controls, u);
+        let rho = s.exp().clamp(self.min_ratio, self.max_ratio);
+        let gamma = ((-s).exp() * rho)
+            .sqrt()
+            .clamp(self.min_current_ratio, self.max_current_ratio);
+        (rho, gamma)
+    }
+
+    /// Bounds on the s controls: q from γ_min²/ρ_max to γ_max²/ρ_min.
+    pub fn control_bounds(&self) -> (f64, f64) {
+        (
+            self.min_ratio.ln() - 2.0 * self.max_current_ratio.ln(),
+            self.max_ratio.ln() - 2.0 * self.min_current_ratio.ln(),
+        )
     }
 }
 
@@ -156,7 +205,7 @@ pub struct Problem {
     lead_model: ExposureModel,
     /// A feed ratio per wire segment set from outside ([`Problem::with_feed_profile`]), used
     /// when the feed is not a design variable.
-    fixed_feed: Option<Vec<f64>>,
+    fixed_feed: Option<Vec<(f64, f64)>>,
 }
 
 /// Reusable buffers for one loss evaluation (no allocation per evaluation once warm).
@@ -216,6 +265,17 @@ impl Problem {
                     name: "feed.nominal_weight",
                     value: f.nominal_weight,
                     requirement: "finite and >= 0",
+                });
+            }
+            if !(f.min_current_ratio.is_finite()
+                && f.min_current_ratio > 0.0
+                && f.max_current_ratio.is_finite()
+                && f.max_current_ratio >= f.min_current_ratio)
+            {
+                return Err(PsoError::InvalidParameter {
+                    name: "feed.min_current_ratio",
+                    value: f.min_current_ratio,
+                    requirement: "0 < min_current_ratio <= max_current_ratio, both finite",
                 });
             }
             if f.control_points == 0 {
@@ -315,26 +375,31 @@ impl Problem {
         Ok(self)
     }
 
-    /// The same problem with the feed along the path given rather than optimised: segment j
-    /// runs at `ratio(u_j)` × the nominal feed, u_j the baseline's normalised arc length at the
-    /// segment's middle (the tip face
-    /// of a tapered panel, which moves in step with the root's optimised feed). Ignored while
-    /// the feed is a design variable. CSE is resolved again when it is the baseline's mean.
+    /// The same problem with the feed and current along the path given rather than
+    /// optimised: segment j runs at (ρ, γ) = `setting(u_j)` × the nominal feed and current,
+    /// u_j the baseline's normalised arc length at the segment's middle (the tip face of a
+    /// tapered panel, which moves in step with the root's optimised feed on the one wire).
+    /// Ignored while the feed is a design variable. CSE is resolved again when it is the
+    /// baseline's mean.
     ///
     /// # Errors
-    /// A ratio that is not finite and > 0 (named `feed_profile[j]`).
-    pub fn with_feed_profile(mut self, ratio: impl Fn(f64) -> f64) -> Result<Self, PsoError> {
-        let ratios: Vec<f64> = self
+    /// A ratio that is not finite and > 0 (named `feed_profile`).
+    pub fn with_feed_profile(
+        mut self,
+        setting: impl Fn(f64) -> (f64, f64),
+    ) -> Result<Self, PsoError> {
+        let ratios: Vec<(f64, f64)> = self
             .trajectory
             .baseline()
             .arc_positions()
             .windows(2)
-            .map(|w| ratio(0.5 * (w[0] + w[1])))
+            .map(|w| setting(0.5 * (w[0] + w[1])))
             .collect();
-        if let Some(j) = ratios.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+        let bad = |v: f64| !(v.is_finite() && v > 0.0);
+        if let Some(&(rho, gamma)) = ratios.iter().find(|(r, g)| bad(*r) || bad(*g)) {
             return Err(PsoError::InvalidParameter {
                 name: "feed_profile",
-                value: ratios[j],
+                value: if bad(rho) { rho } else { gamma },
                 requirement: "finite and > 0 at every segment",
             });
         }
@@ -395,57 +460,103 @@ impl Problem {
     ///   wants the wire as close as it may come), and a swarm or a Gauss–Newton step that knows
     ///   the bound slides along it instead of wasting its moves on infeasible points. No upper
     ///   bound;
-    /// - a feed control within [ln min_ratio, ln max_ratio]: ρ = exp(spline) stays in the
-    ///   feed band for the same reason.
+    /// - a feed control within [`FeedVariable::control_bounds`]: the heat stays within what
+    ///   the feed and current bands can give, for the same reason.
     pub fn bounds(&self) -> (Vec<f64>, Vec<f64>) {
         let k = self.trajectory.control_points();
         let inward = self.free_displacement_mm.max(0.0);
         let mut lower = vec![-inward; k];
         let mut upper = vec![f64::INFINITY; k];
         if let Some(f) = self.objective.feed {
-            lower.extend(std::iter::repeat_n(f.min_ratio.ln(), f.control_points));
-            upper.extend(std::iter::repeat_n(f.max_ratio.ln(), f.control_points));
+            let (lo, hi) = f.control_bounds();
+            lower.extend(std::iter::repeat_n(lo, f.control_points));
+            upper.extend(std::iter::repeat_n(hi, f.control_points));
         }
         (lower, upper)
     }
 
     /// The wire path for the design vector `controls` (its first K values).
+    ///
+    /// With open spline ends the path ends with a straight join from its last point back to
+    /// its first (possibly of zero length): the wire closes the loop so the part comes free,
+    /// and the join is cut like the rest (it can be the nearest wire to the last panels).
     pub fn path(&self, controls: &[f64]) -> Vec<Point2<f64>> {
-        self.trajectory.path(controls)
-    }
-
-    /// The feed ratio ρ of each wire segment for `controls` (all 1 without a feed variable).
-    pub fn feed_ratios(&self, controls: &[f64]) -> Vec<f64> {
         let mut out = Vec::new();
-        self.feed_ratios_into(controls, &mut out);
+        self.path_into(controls, &mut out);
         out
     }
 
-    fn feed_ratios_into(&self, controls: &[f64], out: &mut Vec<f64>) {
-        out.clear();
-        let k = self.trajectory.control_points();
-        match self.objective.feed {
-            Some(f) if controls.len() > k => {
-                let ends = self.objective.ends;
-                out.extend(
-                    self.segment_u
-                        .iter()
-                        .map(|&u| f.ratio(ends, &controls[k..], u)),
-                )
-            }
-            _ => match &self.fixed_feed {
-                Some(ratios) => out.extend_from_slice(ratios),
-                None => out.resize(self.segment_u.len(), 1.0),
-            },
+    fn path_into(&self, controls: &[f64], out: &mut Vec<Point2<f64>>) {
+        self.trajectory.path_into(controls, out);
+        if self.objective.ends == SplineEnds::Open {
+            out.push(out[0]);
         }
     }
 
-    /// The exposure weight of each wire segment for `controls`: its dwell time relative to the
-    /// nominal feed, 1/ρ ([`FeedVariable`]).
+    /// Repeats the last segment's value for the join ([`Problem::path`]).
+    fn with_join<T: Copy>(&self, mut per_segment: Vec<T>) -> Vec<T> {
+        if self.objective.ends == SplineEnds::Open {
+            if let Some(&last) = per_segment.last() {
+                per_segment.push(last);
+            }
+        }
+        per_segment
+    }
+
+    /// The feed ratio ρ of each wire segment for `controls` (all 1 without a feed variable;
+    /// the given profile's with [`Problem::with_feed_profile`]).
+    pub fn feed_ratios(&self, controls: &[f64]) -> Vec<f64> {
+        self.settings(controls)
+            .into_iter()
+            .map(|(rho, _)| rho)
+            .collect()
+    }
+
+    /// The current ratio γ of each wire segment for `controls` (all 1 unless the feed
+    /// variable's current band is wider, [`FeedVariable::max_current_ratio`]).
+    pub fn current_ratios(&self, controls: &[f64]) -> Vec<f64> {
+        self.settings(controls)
+            .into_iter()
+            .map(|(_, gamma)| gamma)
+            .collect()
+    }
+
+    /// (ρ, γ) of each wire segment.
+    fn settings(&self, controls: &[f64]) -> Vec<(f64, f64)> {
+        let k = self.trajectory.control_points();
+        let per_segment = match (self.objective.feed, &self.fixed_feed) {
+            (Some(f), _) if controls.len() > k => {
+                let ends = self.objective.ends;
+                self.segment_u
+                    .iter()
+                    .map(|&u| f.setting(ends, &controls[k..], u))
+                    .collect()
+            }
+            (_, Some(fixed)) => fixed.clone(),
+            _ => vec![(1.0, 1.0); self.segment_u.len()],
+        };
+        self.with_join(per_segment)
+    }
+
+    /// The heat weight q = γ²/ρ of each wire segment ([`FeedVariable`]) into `out`.
     fn feed_weights_into(&self, controls: &[f64], out: &mut Vec<f64>) {
-        self.feed_ratios_into(controls, out);
-        for w in out.iter_mut() {
-            *w = 1.0 / *w;
+        out.clear();
+        let k = self.trajectory.control_points();
+        match (self.objective.feed, &self.fixed_feed) {
+            (Some(f), _) if controls.len() > k => {
+                let ends = self.objective.ends;
+                out.extend(self.segment_u.iter().map(|&u| {
+                    let (rho, gamma) = f.setting(ends, &controls[k..], u);
+                    gamma * gamma / rho
+                }))
+            }
+            (_, Some(fixed)) => out.extend(fixed.iter().map(|(rho, gamma)| gamma * gamma / rho)),
+            _ => out.resize(self.segment_u.len(), 1.0),
+        }
+        if self.objective.ends == SplineEnds::Open {
+            if let Some(&last) = out.last() {
+                out.push(last);
+            }
         }
     }
 
@@ -538,7 +649,7 @@ impl Problem {
         if controls.iter().any(|c| !c.is_finite()) {
             return false;
         }
-        self.trajectory.path_into(controls, &mut scratch.path);
+        self.path_into(controls, &mut scratch.path);
         if !self.is_clear(controls, &scratch.path) || scratch.wire.set(&scratch.path).is_err() {
             return false;
         }

@@ -44,9 +44,16 @@ pub struct PlannerParams {
     pub twist_pivot_chord_fraction: f64,
     /// Nominal wire current (A) (sets the default offset; constant current as a fallback).
     pub current_a: f64,
-    /// Make the feed along the path a design variable (0.5–1.5 × `feed_mm_s`, constant
-    /// current).
+    /// Make the feed along the path a design variable (0.5–1.5 × `feed_mm_s` within the
+    /// machine's limit, constant current; default true).
     pub optimise_feed: bool,
+    /// With `optimise_feed`, let the wire current vary too, within
+    /// `min_current_ratio`…`max_current_ratio` × `current_a` and the supply (default false).
+    pub vary_current: bool,
+    /// Lowest current as a fraction of `current_a` when `vary_current` (default 0.7).
+    pub min_current_ratio: f64,
+    /// Highest current as a fraction of `current_a` when `vary_current` (default 1.3).
+    pub max_current_ratio: f64,
     /// Cutting feed (mm/s).
     pub feed_mm_s: f64,
     /// Straight lead-in / lead-out length behind the trailing edge (mm).
@@ -78,6 +85,9 @@ impl Default for PlannerParams {
             twist_pivot_chord_fraction: Placement::ROOT.pivot_chord_fraction,
             current_a: job.current_a,
             optimise_feed: true,
+            vary_current: false,
+            min_current_ratio: 0.7,
+            max_current_ratio: 1.3,
             feed_mm_s: job.feed_mm_s,
             lead_in_mm: job.lead_in_mm,
             panels: job.panels,
@@ -145,9 +155,14 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
         cse: (goal.cse > 0.0).then_some(goal.cse),
         panels: p.panels,
         objective: cell_planner::pso::Objective {
-            feed: p
-                .optimise_feed
-                .then(cell_planner::pso::FeedVariable::default),
+            feed: p.optimise_feed.then(|| {
+                let feed = cell_planner::pso::FeedVariable::default();
+                if p.vary_current {
+                    feed.with_current_band((p.min_current_ratio, p.max_current_ratio))
+                } else {
+                    feed
+                }
+            }),
             ..defaults.objective
         },
         pso: PsoConfig {

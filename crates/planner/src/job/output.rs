@@ -105,6 +105,10 @@ pub struct SectionPlan {
     /// Feed / nominal feed at each point of the optimised path as optimised (all 1 unless the
     /// feed is a variable, [`Objective::feed`](crate::pso::Objective::feed)).
     pub feed_ratio: Vec<f64>,
+    /// Wire current / nominal current at each point of the optimised path as optimised (all 1
+    /// unless the feed variable's current band is wider,
+    /// [`FeedVariable::max_current_ratio`](crate::pso::FeedVariable::max_current_ratio)).
+    pub current_ratio: Vec<f64>,
     /// The lead-in in this section's frame (mm): from where the wire enters the foam to the
     /// first point of [`SectionPlan::optimised`].
     pub lead_in: Vec<Point2<f64>>,

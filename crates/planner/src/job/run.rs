@@ -47,6 +47,9 @@ struct SectionJob<'a> {
     iterations_before: usize,
     iterations_total: usize,
     started: Instant,
+    /// The root's feed variable within the machine's feed limit and the supply's current
+    /// range (`None`: constant feed).
+    feed: Option<pso::FeedVariable>,
 }
 
 /// Plans one section (`foil`: normalised and scaled to `chord_mm`): baseline at `offset_mm`,
@@ -75,9 +78,7 @@ fn plan_section(
         cse: job.cse,
         // Only the root's feed is a variable: the wire has one timing for both faces.
         feed: if s.frame_id == SECTION_FRAME_ID {
-            job.objective
-                .feed
-                .map(|f| f.within_machine(job.feed_mm_s, job.machine.max_feed_mm_s))
+            s.feed
         } else {
             None
         },
@@ -96,9 +97,17 @@ fn plan_section(
         // dwell is 1/ρ its constant-feed dwell too (by normalised arc length, which the
         // synchronisation matches on each side of the leading edge to within the sections'
         // difference in shape; the exposure is recomputed on the synchronised paths after).
-        if root.feed_ratio.iter().any(|&r| r != 1.0) {
-            let profile = arc_profile(&root.optimised, &root.feed_ratio);
-            problem = problem.with_feed_profile(profile).map_err(wrap)?;
+        if root
+            .feed_ratio
+            .iter()
+            .chain(&root.current_ratio)
+            .any(|&r| r != 1.0)
+        {
+            let feed = arc_profile(&root.optimised, &root.feed_ratio);
+            let current = arc_profile(&root.optimised, &root.current_ratio);
+            problem = problem
+                .with_feed_profile(|u| (feed(u), current(u)))
+                .map_err(wrap)?;
         }
     }
     let k = problem.trajectory().control_points();
@@ -166,27 +175,38 @@ fn plan_section(
     let optimised_exposure = problem.exposure(&result.controls).map_err(wrap)?;
     let cse = problem.cse();
     // Point k is reached by segment k − 1; point 0 takes segment 0's ratio.
-    let segment_ratios = problem.feed_ratios(&result.controls);
-    let mut feed_ratio = Vec::with_capacity(optimised.len() + 1);
-    feed_ratio.push(segment_ratios.first().copied().unwrap_or(1.0));
-    feed_ratio.extend_from_slice(&segment_ratios);
-    // Open spline ends leave the last point off the first: the cut closes the loop with a
-    // straight join back to it (without it the wedge between lead-in and lead-out would stay
-    // on the part as a sliver). The join comes after every panel's cut point, so it adds no
-    // exposure.
-    if optimised.first() != optimised.last() {
-        optimised.push(optimised[0]);
-        feed_ratio.push(*feed_ratio.last().expect("a ratio per point"));
+    let per_point = |segments: Vec<f64>| {
+        let mut out = Vec::with_capacity(segments.len() + 2);
+        out.push(segments.first().copied().unwrap_or(1.0));
+        out.extend_from_slice(&segments);
+        out
+    };
+    let mut feed_ratio = per_point(problem.feed_ratios(&result.controls));
+    let mut current_ratio = per_point(problem.current_ratios(&result.controls));
+    // With open spline ends the path closes with a join back to its first point (without it
+    // the wedge between lead-in and lead-out would stay on the part as a sliver,
+    // `Problem::path`); a zero-length join is dropped.
+    let n = optimised.len();
+    if n > 2 && optimised[n - 1] == optimised[n - 2] {
+        optimised.pop();
+        feed_ratio.pop();
+        current_ratio.pop();
     }
     let plan = SectionPlan {
         feed_ratio,
+        current_ratio,
         lead_in: Vec::new(),
         lead_out: Vec::new(),
         airfoil: foil.name().to_string(),
         chord_mm,
         foil: foil.points().to_vec(),
         surface: foil.resampled_cosine(surface_points)?.points().to_vec(),
-        baseline: problem.path(&vec![0.0; k]),
+        baseline: {
+            // The baseline is closed already: no join.
+            let mut b = problem.path(&vec![0.0; k]);
+            b.dedup();
+            b
+        },
         optimised,
         offset_mm: s.offset_mm,
         cse,
@@ -291,6 +311,10 @@ pub fn plan_observed(
         iterations_before: before,
         iterations_total: job.pso.iterations * sections,
         started,
+        feed: job.objective.feed.map(|f| {
+            f.within_machine(job.feed_mm_s, job.machine.max_feed_mm_s)
+                .within_supply(job.current_a, proc.supply.min_a, proc.supply.max_a)
+        }),
     };
     let (mut root, mut iterations) = plan_section(
         &section_job(&root_name, root_offset, SECTION_FRAME_ID, 0),
@@ -330,10 +354,13 @@ pub fn plan_observed(
     let mut tip_plan = tip_plan;
     // Feed ratios at the cut points: as optimised, or carried onto the resampled points by arc
     // length (the resampled points lie on the optimised path).
-    let cut_ratios = if tip_plan.is_some() {
-        along_arc(&root.optimised, &root.feed_ratio, &root_cut)
+    let (cut_ratios, cut_currents) = if tip_plan.is_some() {
+        (
+            along_arc(&root.optimised, &root.feed_ratio, &root_cut),
+            along_arc(&root.optimised, &root.current_ratio, &root_cut),
+        )
     } else {
-        root.feed_ratio.clone()
+        (root.feed_ratio.clone(), root.current_ratio.clone())
     };
 
     // Leads: straight along each chord line, from behind the TE.
@@ -372,12 +399,22 @@ pub fn plan_observed(
     let (r, t) = place(&[root_out, root_cut[0]], &[tip_out, tip_cut[0]]);
     let lead_in = mover.motion(&r, &t, &[1.0; 2], &mut notes)?;
     let (r, t) = place(&root_cut, &tip_cut);
-    let cut = mover.motion(&r, &t, &cut_ratios, &mut notes)?;
+    let mut cut = mover.motion(&r, &t, &cut_ratios, &mut notes)?;
+    // With the current a variable too (FeedVariable::max_current_ratio), the nominal current
+    // scaled point by point.
+    for (a, g) in cut.current_a.iter_mut().zip(&cut_currents) {
+        *a *= g;
+    }
     if let Some(t) = tip_plan.as_mut() {
         // Both faces' exposure along the synchronised paths, at the dwell the carriages really
         // give them: the root's optimised feed, and the slow-downs where a carriage reaches
         // the machine's feed limit (the tip face moves in step with the root).
-        let dwell = dwell_ratios(&root_cut, &tip_cut, &cut, job.feed_mm_s);
+        // Heat per millimetre is γ²/ρ: an effective ratio ρ/γ² carries the current too.
+        let dwell: Vec<f64> = dwell_ratios(&root_cut, &tip_cut, &cut, job.feed_mm_s)
+            .iter()
+            .zip(&cut_currents)
+            .map(|(rho, g)| rho / (g * g))
+            .collect();
         refresh_exposure(job, &mut root, &root_foil, &root_cut, &dwell)?;
         let tip_foil = &tip.as_ref().expect("a tip plan has a tip").1;
         refresh_exposure(job, t, tip_foil, &tip_cut, &dwell)?;

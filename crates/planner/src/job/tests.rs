@@ -326,6 +326,60 @@ fn an_optimised_feed_varies_within_its_band_at_constant_current() {
     );
 }
 
+/// With a current band the heat per millimetre leaves the feed's band: the current moves
+/// within the band and the supply, the feed within its band, and the reported exposure is the
+/// model's at the heat weight γ²/ρ the plan's feed and current give.
+#[test]
+fn a_varied_current_stays_in_its_band_and_the_supply() {
+    let job = HotwireJob {
+        objective: Objective {
+            feed: Some(crate::pso::FeedVariable::default().with_current_band((0.7, 1.3))),
+            ..Objective::default()
+        },
+        ..small(4)
+    };
+    let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
+    let supply = job.machine.hotwire.as_ref().unwrap().supply_a;
+    let (lo, hi) = (supply[0].max(0.7 * 3.0), supply[1].min(1.3 * 3.0));
+    let currents = &p.cut.current_a;
+    assert!(
+        currents.iter().all(|&a| a >= lo - 1e-9 && a <= hi + 1e-9),
+        "{currents:?}"
+    );
+    assert!(
+        currents.iter().any(|&a| (a - 3.0).abs() > 0.05),
+        "the current moved"
+    );
+    // The exposure the plan reports is the model's at weights γ²/ρ per segment.
+    let r = &p.root;
+    let panels = crate::exposure::Panels::from_points(&r.surface).unwrap();
+    let mut wire = crate::exposure::WireSegments::from_points(&r.optimised).unwrap();
+    let weights: Vec<f64> = (1..r.optimised.len())
+        .map(|k| r.current_ratio[k].powi(2) / r.feed_ratio[k])
+        .collect();
+    wire.set_weights(&weights).unwrap();
+    let mut e = vec![0.0; panels.len()];
+    job.objective
+        .model
+        .exposure_into(&panels, &wire, &mut e)
+        .unwrap();
+    let lead = crate::exposure::WireSegments::from_points(&r.lead_in).unwrap();
+    let mut extra = vec![0.0; panels.len()];
+    crate::exposure::ExposureModel {
+        causal: crate::exposure::Causal::Off,
+        ..job.objective.model
+    }
+    .exposure_into(&panels, &lead, &mut extra)
+    .unwrap();
+    for (i, ((a, b), c)) in r.optimised_exposure.iter().zip(&e).zip(&extra).enumerate() {
+        assert!(
+            (a - (b + c)).abs() <= 2e-3 * a.abs().max(1.0),
+            "{i}: {a} vs {}",
+            b + c
+        );
+    }
+}
+
 /// On a tapered panel the tip face moves in step with the root's optimised feed: its reported
 /// exposure is the one at the dwell the carriage timing really gives each synchronised move
 /// (the root's feed and the feed-limit slow-downs; it differs from the constant-feed one),
