@@ -88,6 +88,13 @@ pub struct HotwireArgs {
     /// constant current; slower where the surface needs more heat).
     #[arg(long)]
     pub constant_feed: bool,
+    /// Length of the straight lead-in behind the trailing edge (mm).
+    #[arg(long, value_name = "MM")]
+    pub lead_in: Option<f64>,
+    /// Let the optimiser lengthen the lead-in up to this (mm): more heat on the first panels
+    /// cut; the block needs that much foam behind the trailing edge.
+    #[arg(long, value_name = "MM")]
+    pub lead_in_max: Option<f64>,
     /// Let the wire current vary along the path too (0.7–1.3 × the nominal, within the
     /// supply), where the feed alone cannot give the heat the surface needs.
     #[arg(long, conflicts_with = "constant_feed")]
@@ -201,7 +208,9 @@ pub fn flag_for(parameter: JobParameter) -> Option<&'static str> {
         JobParameter::TipTwistDeg => Some("--tip-twist"),
         JobParameter::TipSweepMm => Some("--tip-sweep"),
         JobParameter::TwistPivotChordFraction => Some("--twist-pivot"),
-        JobParameter::CurrentA | JobParameter::LeadInMm | JobParameter::OffsetMm => None,
+        JobParameter::LeadInMm => Some("--lead-in"),
+        JobParameter::LeadInMaxMm => Some("--lead-in-max"),
+        JobParameter::CurrentA | JobParameter::OffsetMm => None,
     }
 }
 
@@ -240,6 +249,8 @@ pub fn job_from_args(a: &HotwireArgs) -> Result<HotwireJob, String> {
         material: a.material.clone().unwrap_or(defaults.material.clone()),
         cse: a.cse,
         feed_mm_s: a.feed.unwrap_or(defaults.feed_mm_s),
+        lead_in_mm: a.lead_in.unwrap_or(defaults.lead_in_mm),
+        lead_in_max_mm: a.lead_in_max,
         panels: a.panels.unwrap_or(defaults.panels),
         objective: cell_planner::pso::Objective {
             feed: (!a.constant_feed).then(|| {

@@ -186,7 +186,7 @@ fn ladder(foils: &[PathBuf], panels: usize) {
         ..job
     };
     type Step = fn(HotwireJob) -> HotwireJob;
-    let steps: [(&str, Step); 9] = [
+    let steps: [(&str, Step); 11] = [
         (
             "the swarm as it was (±0.05 mm start velocity, no lead-in in the model)",
             |j| j,
@@ -237,15 +237,29 @@ fn ladder(foils: &[PathBuf], panels: usize) {
                 ..j
             }
         }),
-        ("(for comparison) the refinement alone, no swarm", |j| {
-            HotwireJob {
+        ("(option) + lead-in up to 40 mm", |j| HotwireJob {
+            lead_in_max_mm: Some(40.0),
+            ..j
+        }),
+        ("(option) + current 0.7–1.3 × nominal", |j| HotwireJob {
+            objective: Objective {
+                feed: j.objective.feed.map(|f| f.with_current_band((0.7, 1.3))),
+                ..j.objective
+            },
+            ..j
+        }),
+        (
+            "(for comparison) the default job's refinement alone, no swarm",
+            |j| HotwireJob {
+                lead_in_max_mm: None,
+                objective: Objective::default(),
                 pso: PsoConfig {
                     iterations: 0,
                     ..j.pso
                 },
                 ..j
-            }
-        }),
+            },
+        ),
     ];
     println!("\nLadder (each row adds one change; CV base → opt, p95 abs(E−CSE) base → opt, s):\n");
     let names: Vec<String> = picks

@@ -58,7 +58,12 @@
 //!    spline tied the first pass (which wants the wire close and slow) to the last (far and
 //!    fast): δ(0) = (c_{K−1} + 4c₀ + c₁)/6, so S1223's last control at +3.4 mm pushed the start
 //!    0.24 mm out. The path and feed splines now have open ends ([`spline::SplineEnds::Open`]);
-//!    the lead-out closes the loop back to the first point, then leaves along the lead-in.
+//!    the cut closes the loop with a straight join back to its first point (part of the wire
+//!    the loss sees), and the lead-out leaves along the lead-in. The lead-in's length can be a
+//!    design variable too (`lead_in_max_mm`, [`problem::Problem::with_lead_in_reach`]); with
+//!    the other changes in place it gains little (the ladder's option row), so it is off by
+//!    default: it needs more foam behind the trailing edge. The entry stays at the trailing
+//!    edge, where the lead-in and lead-out run in the block's waste along the chord line.
 //! 6. **Resolution where it matters.** 32 controls evenly spaced over ~420 mm of path act
 //!    every 13 mm, but the leading edge's under-exposed stretch is a few millimetres long.
 //!    The controls are now spaced like the cosine-clustered panels

@@ -206,6 +206,9 @@ pub struct Problem {
     /// A feed ratio per wire segment set from outside ([`Problem::with_feed_profile`]), used
     /// when the feed is not a design variable.
     fixed_feed: Option<Vec<(f64, f64)>>,
+    /// The lead-in's length as a design variable: the unit direction its start moves in, and
+    /// how far (mm) beyond [`Problem::lead_in_start`] ([`Problem::with_lead_in_reach`]).
+    lead_in_reach: Option<(nalgebra::Vector2<f64>, f64)>,
 }
 
 /// Reusable buffers for one loss evaluation (no allocation per evaluation once warm).
@@ -333,6 +336,7 @@ impl Problem {
             segment_u,
             lead_in_start: None,
             fixed_feed: None,
+            lead_in_reach: None,
             lead_model: ExposureModel {
                 causal: crate::exposure::Causal::Off,
                 ..objective.model
@@ -408,6 +412,59 @@ impl Problem {
         Ok(self)
     }
 
+    /// The same problem with the lead-in's length a design variable (the last one): its start
+    /// may move up to `reach_mm` further along `direction` (pointing away from the path; the
+    /// job passes the chord line behind the trailing edge). A longer lead-in heats the first panels cut longer before the wire reaches them
+    /// (seed 000's causal mask gives them nothing else); it needs that much more foam behind
+    /// the entry point.
+    ///
+    /// # Errors
+    /// No lead-in yet ([`Problem::with_lead_in`] first), `reach_mm` not finite and ≥ 0, a
+    /// longest lead-in that breaks the clearance.
+    pub fn with_lead_in_reach(
+        mut self,
+        direction: nalgebra::Vector2<f64>,
+        reach_mm: f64,
+    ) -> Result<Self, PsoError> {
+        let Some(start) = self.lead_in_start else {
+            return Err(PsoError::InvalidParameter {
+                name: "lead_in_reach_mm",
+                value: reach_mm,
+                requirement: "a lead-in to lengthen (with_lead_in first)",
+            });
+        };
+        if !(reach_mm.is_finite() && reach_mm >= 0.0) {
+            return Err(PsoError::InvalidParameter {
+                name: "lead_in_reach_mm",
+                value: reach_mm,
+                requirement: "finite and >= 0",
+            });
+        }
+        let entry = self.trajectory.baseline().points()[0];
+        let direction = direction
+            .try_normalize(1e-12)
+            .ok_or(PsoError::InvalidParameter {
+                name: "lead_in_direction",
+                value: direction.norm(),
+                requirement: "a non-zero vector",
+            })?;
+        let longest = [start + direction * reach_mm, entry];
+        if !self
+            .grid
+            .is_feasible(&longest, self.objective.min_clearance_mm)
+        {
+            return Err(PsoError::InfeasibleBaseline {
+                clearance_mm: crate::trajectory::clearance_mm(
+                    &longest,
+                    self.grid.outline(),
+                    f64::INFINITY,
+                ),
+            });
+        }
+        self.lead_in_reach = Some((direction, reach_mm));
+        Ok(self)
+    }
+
     /// The lead-in's start, if the problem has one ([`Problem::with_lead_in`]).
     pub fn lead_in_start(&self) -> Option<Point2<f64>> {
         self.lead_in_start
@@ -448,7 +505,30 @@ impl Problem {
     /// Number of design variables: the K path controls, then the feed controls if the feed
     /// is a variable ([`Objective::feed`]).
     pub fn dimension(&self) -> usize {
-        self.trajectory.control_points() + self.objective.feed.map_or(0, |f| f.control_points)
+        self.trajectory.control_points()
+            + self.objective.feed.map_or(0, |f| f.control_points)
+            + usize::from(self.lead_in_reach.is_some())
+    }
+
+    /// The feed controls of a design vector (empty without a feed variable).
+    fn feed_controls<'a>(&self, controls: &'a [f64]) -> &'a [f64] {
+        let k = self.trajectory.control_points();
+        let end = k + self.objective.feed.map_or(0, |f| f.control_points);
+        &controls[k.min(controls.len())..end.min(controls.len())]
+    }
+
+    /// Where the lead-in starts for a design vector: the fixed start, moved back along the
+    /// lead's line by the last design variable when the length is one
+    /// ([`Problem::with_lead_in_reach`]).
+    pub fn lead_start(&self, controls: &[f64]) -> Option<Point2<f64>> {
+        let start = self.lead_in_start?;
+        Some(match self.lead_in_reach {
+            Some((direction, _)) => {
+                let extra = controls.get(self.dimension() - 1).copied().unwrap_or(0.0);
+                start + direction * extra
+            }
+            None => start,
+        })
     }
 
     /// Box bounds (lower, upper) on the design variables that every optimiser keeps to:
@@ -471,6 +551,10 @@ impl Problem {
             let (lo, hi) = f.control_bounds();
             lower.extend(std::iter::repeat_n(lo, f.control_points));
             upper.extend(std::iter::repeat_n(hi, f.control_points));
+        }
+        if let Some((_, reach)) = self.lead_in_reach {
+            lower.push(0.0);
+            upper.push(reach);
         }
         (lower, upper)
     }
@@ -527,9 +611,10 @@ impl Problem {
         let per_segment = match (self.objective.feed, &self.fixed_feed) {
             (Some(f), _) if controls.len() > k => {
                 let ends = self.objective.ends;
+                let g = self.feed_controls(controls);
                 self.segment_u
                     .iter()
-                    .map(|&u| f.setting(ends, &controls[k..], u))
+                    .map(|&u| f.setting(ends, g, u))
                     .collect()
             }
             (_, Some(fixed)) => fixed.clone(),
@@ -545,8 +630,9 @@ impl Problem {
         match (self.objective.feed, &self.fixed_feed) {
             (Some(f), _) if controls.len() > k => {
                 let ends = self.objective.ends;
+                let g = self.feed_controls(controls);
                 out.extend(self.segment_u.iter().map(|&u| {
-                    let (rho, gamma) = f.setting(ends, &controls[k..], u);
+                    let (rho, gamma) = f.setting(ends, g, u);
                     gamma * gamma / rho
                 }))
             }
@@ -588,7 +674,7 @@ impl Problem {
         self.objective
             .model
             .exposure_into(&self.surface, &wire, &mut out)?;
-        if let Some(start) = self.lead_in_start {
+        if let Some(start) = self.lead_start(controls) {
             let lead = WireSegments::from_points(&[start, self.path(controls)[0]])?;
             let mut extra = vec![0.0; out.len()];
             self.lead_model
@@ -668,7 +754,7 @@ impl Problem {
         {
             return false;
         }
-        if let Some(start) = self.lead_in_start {
+        if let Some(start) = self.lead_start(controls) {
             scratch.lead = [start, scratch.path[0]];
             if !self
                 .grid
@@ -705,14 +791,14 @@ impl Problem {
         let root = self.objective.smoothing.sqrt();
         let cyclic = self.objective.ends == SplineEnds::Periodic;
         let k = self.trajectory.control_points().min(controls.len());
-        for c in [&controls[..k], &controls[k..]] {
+        for c in [&controls[..k], self.feed_controls(controls)] {
             let m = c.len();
             let pairs = if cyclic { m } else { m.saturating_sub(1) };
             out.extend((0..pairs).map(|i| root * (c[(i + 1) % m] - c[i])));
         }
         if let Some(f) = self.objective.feed {
             let root = f.nominal_weight.sqrt();
-            out.extend(controls[k..].iter().map(|c| root * c));
+            out.extend(self.feed_controls(controls).iter().map(|c| root * c));
         }
     }
 

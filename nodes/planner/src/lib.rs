@@ -58,6 +58,9 @@ pub struct PlannerParams {
     pub feed_mm_s: f64,
     /// Straight lead-in / lead-out length behind the trailing edge (mm).
     pub lead_in_mm: f64,
+    /// The longest lead-in (mm) when its length is a design variable from `lead_in_mm` to
+    /// this; 0 (default): fixed at `lead_in_mm`.
+    pub lead_in_max_mm: f64,
     /// Surface panels N of the exposure model.
     pub panels: usize,
     /// PSO iterations when a goal asks for 0.
@@ -90,6 +93,7 @@ impl Default for PlannerParams {
             max_current_ratio: 1.3,
             feed_mm_s: job.feed_mm_s,
             lead_in_mm: job.lead_in_mm,
+            lead_in_max_mm: 0.0,
             panels: job.panels,
             iterations: job.pso.iterations,
             particles: job.pso.particles,
@@ -178,6 +182,7 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
         seed: goal.seed,
         feed_mm_s: p.feed_mm_s,
         lead_in_mm: p.lead_in_mm,
+        lead_in_max_mm: (p.lead_in_max_mm > 0.0).then_some(p.lead_in_max_mm),
         ..defaults
     };
     job::validate(&job).map_err(|e| e.to_string())?;

@@ -22,6 +22,8 @@ pub enum JobParameter {
     SpanMm,
     /// `lead_in_mm`: the lead-in length.
     LeadInMm,
+    /// `lead_in_max_mm`: the longest lead-in the optimiser may choose.
+    LeadInMaxMm,
     /// `panels`: surface panels of the exposure model.
     Panels,
     /// `cse`: the target exposure.
@@ -47,6 +49,7 @@ impl JobParameter {
             Self::CurrentA => "current_a",
             Self::SpanMm => "span_mm",
             Self::LeadInMm => "lead_in_mm",
+            Self::LeadInMaxMm => "lead_in_max_mm",
             Self::Panels => "panels",
             Self::Cse => "cse",
             Self::TipChordMm => "tip_chord_mm",

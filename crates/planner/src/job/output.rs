@@ -109,6 +109,9 @@ pub struct SectionPlan {
     /// unless the feed variable's current band is wider,
     /// [`FeedVariable::max_current_ratio`](crate::pso::FeedVariable::max_current_ratio)).
     pub current_ratio: Vec<f64>,
+    /// Length of the lead-in behind the trailing edge (mm): `HotwireJob::lead_in_mm`
+    /// ([`crate::job::HotwireJob`]), or as optimised with a `lead_in_max_mm`.
+    pub lead_in_mm: f64,
     /// The lead-in in this section's frame (mm): from where the wire enters the foam to the
     /// first point of [`SectionPlan::optimised`].
     pub lead_in: Vec<Point2<f64>>,

@@ -807,6 +807,7 @@ mod tests {
             loss_history: vec![(0, 1.0), (10, 0.5)],
             feed_ratio: vec![1.0; n + 1],
             current_ratio: vec![1.0; n + 1],
+            lead_in_mm: 10.0,
             lead_in: vec![Point2::new(215.0, 0.0), Point2::new(200.5, 0.0)],
             lead_out: vec![Point2::new(200.5, 0.0), Point2::new(215.0, 0.0)],
         }

@@ -91,6 +91,11 @@ fn plan_section(
         problem = problem
             .with_lead_in(lead_in_start(foil, job.lead_in_mm, s.offset_mm))
             .map_err(wrap)?;
+        if let Some(max) = job.lead_in_max_mm.filter(|&m| m > job.lead_in_mm) {
+            problem = problem
+                .with_lead_in_reach(Vector2::x(), max - job.lead_in_mm)
+                .map_err(wrap)?;
+        }
     }
     if let Some(root) = lead_face {
         // The tip face moves in step with the root: where the root's feed is ρ, the tip's
@@ -192,7 +197,12 @@ fn plan_section(
         feed_ratio.pop();
         current_ratio.pop();
     }
+    let lead_in_mm = match problem.lead_start(&result.controls) {
+        Some(start) => job.lead_in_mm + (start - problem.lead_in_start().unwrap_or(start)).norm(),
+        None => job.lead_in_mm,
+    };
     let plan = SectionPlan {
+        lead_in_mm,
         feed_ratio,
         current_ratio,
         lead_in: Vec::new(),
@@ -367,7 +377,7 @@ pub fn plan_observed(
     let behind_te = |s: &SectionPlan| {
         let foil = &s.foil;
         nalgebra::center(&foil[0], &foil[foil.len() - 1])
-            + Vector2::new(job.lead_in_mm + s.offset_mm, 0.0)
+            + Vector2::new(s.lead_in_mm + s.offset_mm, 0.0)
     };
     let root_out = behind_te(&root);
     let (tip_section, tip_chord, placement) = match (&tip_plan, &tip) {
@@ -572,7 +582,7 @@ fn refresh_exposure(
         .map_err(wrap)?;
     if job.lead_in_mm > 0.0 {
         // The lead-in's heat reaches every panel (as in `Problem::with_lead_in`).
-        let start = lead_in_start(foil, job.lead_in_mm, section.offset_mm);
+        let start = lead_in_start(foil, section.lead_in_mm, section.offset_mm);
         let lead = crate::exposure::WireSegments::from_points(&[start, path[0]]).map_err(wrap)?;
         let mut extra = vec![0.0; panels.len()];
         ExposureModel {

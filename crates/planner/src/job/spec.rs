@@ -103,6 +103,11 @@ pub struct HotwireJob {
     pub feed_mm_s: f64,
     /// Length of the straight lead-in and lead-out behind the trailing edge (mm).
     pub lead_in_mm: f64,
+    /// The longest lead-in (mm) if its length is a design variable between
+    /// [`HotwireJob::lead_in_mm`] and this (`None`, default: fixed at `lead_in_mm`). A longer
+    /// lead-in heats the first panels cut; the block needs that much foam behind the trailing
+    /// edge.
+    pub lead_in_max_mm: Option<f64>,
 }
 
 /// The machine profile [`HotwireJob::default`] uses.
@@ -132,6 +137,7 @@ impl Default for HotwireJob {
             seed: 0,
             feed_mm_s: 15.0,
             lead_in_mm: 10.0,
+            lead_in_max_mm: None,
         }
     }
 }
@@ -162,6 +168,15 @@ pub fn validate(job: &HotwireJob) -> Result<(), JobError> {
             value: job.lead_in_mm,
             requirement: "finite and >= 0",
         });
+    }
+    if let Some(max) = job.lead_in_max_mm {
+        if !(max.is_finite() && max >= job.lead_in_mm && job.lead_in_mm > 0.0) {
+            return Err(JobError::InvalidParameter {
+                parameter: JobParameter::LeadInMaxMm,
+                value: max,
+                requirement: "finite and >= lead_in_mm (which must be > 0)",
+            });
+        }
     }
     if job.panels < crate::airfoil::MIN_POINTS {
         return Err(JobError::InvalidParameter {

@@ -326,6 +326,35 @@ fn an_optimised_feed_varies_within_its_band_at_constant_current() {
     );
 }
 
+/// With a lead-in range the optimiser picks the lead's length within it, and the plan's lead
+/// (and the carriage moves) start that far behind the trailing edge on the chord line; a range
+/// shorter than the lead is refused by name.
+#[test]
+fn a_variable_lead_in_stays_in_its_range_on_the_chord_line() {
+    let job = HotwireJob {
+        lead_in_max_mm: Some(40.0),
+        ..small(2)
+    };
+    let p = plan(&job, |_| ControlFlow::Continue(())).unwrap();
+    let r = &p.root;
+    assert!((10.0..=40.0).contains(&r.lead_in_mm), "{}", r.lead_in_mm);
+    let te = nalgebra::center(&r.foil[0], &r.foil[r.foil.len() - 1]);
+    let expected = te + Vector2::new(r.lead_in_mm + r.offset_mm, 0.0);
+    assert!((r.lead_in[0] - expected).norm() < 1e-9);
+    assert_eq!(r.lead_out.last(), r.lead_in.first());
+    let origin = Vector2::new(60.0, 60.0);
+    assert!((p.lead_in.xy[0] - (expected + origin)).norm() < 1e-9);
+    let e = plan(
+        &HotwireJob {
+            lead_in_max_mm: Some(5.0),
+            ..small(2)
+        },
+        |_| ControlFlow::Continue(()),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("lead_in_max_mm"), "{e}");
+}
+
 /// With a current band the heat per millimetre leaves the feed's band: the current moves
 /// within the band and the supply, the feed within its band, and the reported exposure is the
 /// model's at the heat weight γ²/ρ the plan's feed and current give.
