@@ -44,6 +44,22 @@ fn env_list(name: &str) -> Option<Vec<String>> {
         .map(|v| v.split(',').map(|s| s.trim().to_string()).collect())
 }
 
+/// True if `path`'s file stem is one of `names`.
+fn named(path: &Path, names: &[String]) -> bool {
+    names
+        .iter()
+        .any(|n| path.file_stem().is_some_and(|s| s == n.as_str()))
+}
+
+/// The foils the environment variable `var` names (comma-separated stems), else the first
+/// three.
+fn three_or_named(foils: &[PathBuf], var: &str) -> Vec<PathBuf> {
+    match env_list(var) {
+        Some(names) => foils.iter().filter(|p| named(p, &names)).cloned().collect(),
+        None => foils.iter().take(3).cloned().collect(),
+    }
+}
+
 struct Row {
     name: String,
     cv: (f64, f64),
@@ -63,11 +79,8 @@ fn main() {
         .filter(|p| p.extension().is_some_and(|e| e == "dat"))
         .collect();
     foils.sort();
-    if let Some(pick) = env_list("UNIFORMITY_FOILS") {
-        foils.retain(|p| {
-            pick.iter()
-                .any(|n| p.file_stem().is_some_and(|s| s == n.as_str()))
-        });
+    if let Some(names) = env_list("UNIFORMITY_FOILS") {
+        foils.retain(|p| named(p, &names));
     }
     let clearance_required = Objective::default().min_clearance_mm;
     println!(
@@ -153,18 +166,7 @@ fn ladder(foils: &[PathBuf], panels: usize) {
     use cell_planner::refine::RefineConfig;
     use cell_planner::spline::SplineEnds;
     use cell_planner::trajectory::ControlSpacing;
-    let picks: Vec<PathBuf> = match env_list("LADDER_FOILS") {
-        Some(names) => foils
-            .iter()
-            .filter(|p| {
-                names
-                    .iter()
-                    .any(|n| p.file_stem().is_some_and(|s| s == n.as_str()))
-            })
-            .cloned()
-            .collect(),
-        None => foils.iter().take(3).cloned().collect(),
-    };
+    let picks = three_or_named(foils, "LADDER_FOILS");
     let paper = |job: HotwireJob| HotwireJob {
         objective: Objective {
             feed: None,
@@ -305,18 +307,7 @@ fn peer_rows(foils: &[PathBuf], panels: usize) {
     let iterations: usize = std::env::var("PEER_ITERATIONS")
         .ok()
         .map_or(2000, |v| v.parse().expect("PEER_ITERATIONS"));
-    let picks: Vec<PathBuf> = match env_list("PEER_FOILS") {
-        Some(names) => foils
-            .iter()
-            .filter(|p| {
-                names
-                    .iter()
-                    .any(|n| p.file_stem().is_some_and(|s| s == n.as_str()))
-            })
-            .cloned()
-            .collect(),
-        None => foils.iter().take(3).cloned().collect(),
-    };
+    let picks = three_or_named(foils, "PEER_FOILS");
     let python = std::env::var("PEER_PYTHON").ok();
     println!(
         "\nThe paper's swarm alone, {iterations} iterations, constant feed, no refinement:\n\n\

@@ -326,6 +326,29 @@ fn an_optimised_feed_varies_within_its_band_at_constant_current() {
     );
 }
 
+/// A section's exposure along its optimised path with per-segment heat `weights`, plus its
+/// lead-in's (no causal mask on it), recomputed from the plan's geometry.
+fn section_exposure(job: &HotwireJob, section: &SectionPlan, weights: &[f64]) -> Vec<f64> {
+    use crate::exposure::{Causal, ExposureModel, Panels, WireSegments};
+    let panels = Panels::from_points(&section.surface).unwrap();
+    let mut wire = WireSegments::from_points(&section.optimised).unwrap();
+    wire.set_weights(weights).unwrap();
+    let mut e = vec![0.0; panels.len()];
+    job.objective
+        .model
+        .exposure_into(&panels, &wire, &mut e)
+        .unwrap();
+    let lead = WireSegments::from_points(&section.lead_in).unwrap();
+    let mut extra = vec![0.0; panels.len()];
+    ExposureModel {
+        causal: Causal::Off,
+        ..job.objective.model
+    }
+    .exposure_into(&panels, &lead, &mut extra)
+    .unwrap();
+    e.iter().zip(&extra).map(|(a, b)| a + b).collect()
+}
+
 /// With a lead-in range the optimiser picks the lead's length within it, and the plan's lead
 /// (and the carriage moves) start that far behind the trailing edge on the chord line; a range
 /// shorter than the lead is refused by name.
@@ -381,31 +404,12 @@ fn a_varied_current_stays_in_its_band_and_the_supply() {
     );
     // The exposure the plan reports is the model's at weights γ²/ρ per segment.
     let r = &p.root;
-    let panels = crate::exposure::Panels::from_points(&r.surface).unwrap();
-    let mut wire = crate::exposure::WireSegments::from_points(&r.optimised).unwrap();
     let weights: Vec<f64> = (1..r.optimised.len())
         .map(|k| r.current_ratio[k].powi(2) / r.feed_ratio[k])
         .collect();
-    wire.set_weights(&weights).unwrap();
-    let mut e = vec![0.0; panels.len()];
-    job.objective
-        .model
-        .exposure_into(&panels, &wire, &mut e)
-        .unwrap();
-    let lead = crate::exposure::WireSegments::from_points(&r.lead_in).unwrap();
-    let mut extra = vec![0.0; panels.len()];
-    crate::exposure::ExposureModel {
-        causal: crate::exposure::Causal::Off,
-        ..job.objective.model
-    }
-    .exposure_into(&panels, &lead, &mut extra)
-    .unwrap();
-    for (i, ((a, b), c)) in r.optimised_exposure.iter().zip(&e).zip(&extra).enumerate() {
-        assert!(
-            (a - (b + c)).abs() <= 2e-3 * a.abs().max(1.0),
-            "{i}: {a} vs {}",
-            b + c
-        );
+    let e = section_exposure(&job, r, &weights);
+    for (i, (a, b)) in r.optimised_exposure.iter().zip(&e).enumerate() {
+        assert!((a - b).abs() <= 2e-3 * a.abs().max(1.0), "{i}: {a} vs {b}");
     }
 }
 
@@ -437,28 +441,7 @@ fn the_tip_face_follows_the_roots_feed() {
             d.max(dt) / t / job.feed_mm_s
         })
         .collect();
-    let exposure_at = |weights: &[f64]| {
-        let panels = crate::exposure::Panels::from_points(&tip.surface).unwrap();
-        let mut wire = crate::exposure::WireSegments::from_points(&tip.optimised).unwrap();
-        wire.set_weights(weights).unwrap();
-        let mut e = vec![0.0; panels.len()];
-        job.objective
-            .model
-            .exposure_into(&panels, &wire, &mut e)
-            .unwrap();
-        let lead = crate::exposure::WireSegments::from_points(&tip.lead_in).unwrap();
-        let mut extra = vec![0.0; panels.len()];
-        crate::exposure::ExposureModel {
-            causal: crate::exposure::Causal::Off,
-            ..job.objective.model
-        }
-        .exposure_into(&panels, &lead, &mut extra)
-        .unwrap();
-        e.iter()
-            .zip(&extra)
-            .map(|(a, b)| a + b)
-            .collect::<Vec<f64>>()
-    };
+    let exposure_at = |weights: &[f64]| section_exposure(&job, tip, weights);
     let stepped = exposure_at(&ratios.iter().map(|r| 1.0 / r).collect::<Vec<_>>());
     let constant = exposure_at(&vec![1.0; ratios.len()]);
     let close = |a: &[f64], b: &[f64]| {
