@@ -157,6 +157,99 @@ fn main() {
     if std::env::var("UNIFORMITY_LADDER").is_ok_and(|v| v != "0") {
         ladder(&foils, panels);
     }
+    if std::env::var("UNIFORMITY_ENTRY").is_ok_and(|v| v != "0") {
+        entries(&foils, panels);
+    }
+}
+
+/// Where the wire enters the loop (issue 21, item 2): the refinement alone (200 iterations,
+/// from the baseline, the default objective) entering at the trailing edge (lead-in along the
+/// chord behind it), the middle of the upper surface (lead-in along the outward normal), the
+/// leading edge (lead-in along the chord ahead of it) and the middle of the lower surface, on
+/// the foils `ENTRY_FOILS` names (default the first three). CV of E before → after each.
+fn entries(foils: &[PathBuf], panels: usize) {
+    use cell_planner::exposure::coefficient_of_variation;
+    use cell_planner::refine::{refine, RefineConfig};
+    use nalgebra::Vector2;
+    println!("\nEntry point (refinement alone from the baseline; CV before → after):\n");
+    println!("| foil | trailing edge | upper middle | leading edge | lower middle |\n|---|---|---|---|---|");
+    for path in three_or_named(foils, "ENTRY_FOILS") {
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        let job = HotwireJob {
+            root_airfoil: AirfoilSource::File(path.clone()),
+            ..HotwireJob::default()
+        };
+        let foil = job
+            .root_airfoil
+            .load()
+            .unwrap()
+            .normalised()
+            .scaled(200.0)
+            .unwrap();
+        let offset = plan(
+            &HotwireJob {
+                pso: PsoConfig {
+                    iterations: 0,
+                    ..PsoConfig::default()
+                },
+                ..job.clone()
+            },
+            |_| ControlFlow::Continue(()),
+        )
+        .expect("plan")
+        .root
+        .offset_mm;
+        let baseline = Baseline::fixed_offset(&foil, offset, panels + panels / 2).unwrap();
+        let m = baseline.points().len() - 1;
+        let le = (0..m)
+            .min_by(|&a, &b| baseline.points()[a].x.total_cmp(&baseline.points()[b].x))
+            .unwrap();
+        let surface_points = {
+            let probe = foil.resampled_cosine(panels).unwrap();
+            let p = probe.points();
+            if p.first() == p.last() {
+                panels + 1
+            } else {
+                panels
+            }
+        };
+        let mut cells = Vec::new();
+        for vertex in [0, le / 2, le, (le + m) / 2] {
+            let problem = Problem::new(
+                &foil,
+                surface_points,
+                baseline.clone(),
+                Objective::default(),
+            )
+            .and_then(|p| p.entering_at(vertex))
+            .unwrap();
+            let b = problem.trajectory().baseline();
+            let (first, normal) = (b.points()[0], b.normals()[0]);
+            let start = match vertex {
+                0 => lead_in_start(&foil, job.lead_in_mm, offset),
+                v if v == le => first - Vector2::new(job.lead_in_mm, 0.0),
+                _ => first + normal * job.lead_in_mm,
+            };
+            let cell = match problem.with_lead_in(start) {
+                Ok(p) => {
+                    let zero = vec![0.0; p.dimension()];
+                    let config = RefineConfig {
+                        iterations: 200,
+                        ..RefineConfig::default()
+                    };
+                    let r = refine(&p, &zero, &config, |_| ControlFlow::Continue(()));
+                    format!(
+                        "{:.3} → {:.3}",
+                        coefficient_of_variation(&p.exposure(&zero).unwrap()),
+                        coefficient_of_variation(&p.exposure(&r.controls).unwrap())
+                    )
+                }
+                Err(e) => format!("lead-in refused: {e}"),
+            };
+            cells.push(cell);
+        }
+        println!("| {name} | {} |", cells.join(" | "));
+    }
 }
 
 /// The crate docs' evidence ("Why the swarm stalled"): each change on top of the previous

@@ -62,8 +62,14 @@
 //!    the loss sees), and the lead-out leaves along the lead-in. The lead-in's length can be a
 //!    design variable too (`lead_in_max_mm`, [`problem::Problem::with_lead_in_reach`]); with
 //!    the other changes in place it gains little (the ladder's option row), so it is off by
-//!    default: it needs more foam behind the trailing edge. The entry stays at the trailing
-//!    edge, where the lead-in and lead-out run in the block's waste along the chord line.
+//!    default: it needs more foam behind the trailing edge. The entry point was measured as a
+//!    design choice too ([`problem::Problem::entering_at`], the bench's `UNIFORMITY_ENTRY=1`):
+//!    entering at the trailing edge beat the middle of the upper surface, the leading edge
+//!    and the middle of the lower surface on all five foils tried (CV after 0.021–0.062
+//!    against 0.059–0.095), so the job enters there: the first panels cut (upper surface at
+//!    the trailing edge) run nearly parallel to the lead-in, which heats them like a cut
+//!    already under way, and the lead-in and lead-out run in the block's waste along the
+//!    chord line.
 //! 6. **Resolution where it matters.** 32 controls evenly spaced over ~420 mm of path act
 //!    every 13 mm, but the leading edge's under-exposed stretch is a few millimetres long.
 //!    The controls are now spaced like the cosine-clustered panels

@@ -192,6 +192,11 @@ pub struct Problem {
     /// which moves further than this from the baseline is feasible without a test.
     pub(crate) free_displacement_mm: f64,
     surface: Panels,
+    /// The surface's corner points, first the one nearest the wire's entry.
+    surface_points: Vec<Point2<f64>>,
+    /// Panel i of [`Problem::surface`] is panel (i + shift) mod N counted from the trailing
+    /// edge ([`Problem::entering_at`]).
+    surface_shift: usize,
     trajectory: Trajectory,
     pub(crate) objective: Objective,
     cse: f64,
@@ -308,7 +313,12 @@ impl Problem {
                 ),
             });
         }
-        let surface = Panels::from_points(foil.resampled_cosine(surface_panels)?.points())?;
+        let mut surface_points = foil.resampled_cosine(surface_panels)?.points().to_vec();
+        surface_points.dedup();
+        if surface_points.len() > 1 && surface_points.first() == surface_points.last() {
+            surface_points.pop();
+        }
+        let surface = Panels::from_points(&surface_points)?;
         // The clearance is ≥ the required one (checked above); 1e-9 mm for rounding.
         let free_displacement_mm =
             crate::trajectory::clearance_mm(baseline.points(), &outline, f64::INFINITY)
@@ -330,6 +340,8 @@ impl Problem {
             grid: OutlineGrid::new(&outline),
             free_displacement_mm,
             surface,
+            surface_points,
+            surface_shift: 0,
             trajectory,
             objective,
             cse: 0.0,
@@ -344,6 +356,66 @@ impl Problem {
         };
         p.resolve_cse()?;
         Ok(p)
+    }
+
+    /// The same problem with the wire entering the loop at baseline vertex `vertex` instead of
+    /// vertex 0 (the trailing edge): the baseline and the surface are both restarted there
+    /// (the surface at its corner nearest the new first path point), so the causal mask's
+    /// search window follows the new cutting order. Exposures stay in this order;
+    /// [`Problem::trailing_edge_order`] puts them back. Call before adding a lead-in.
+    ///
+    /// # Errors
+    /// `vertex` past the baseline; a lead-in already set.
+    pub fn entering_at(mut self, vertex: usize) -> Result<Self, PsoError> {
+        let base = self.trajectory.baseline().points();
+        let m = base.len() - 1;
+        if vertex >= m || self.lead_in_start.is_some() {
+            return Err(PsoError::InvalidParameter {
+                name: "entry_vertex",
+                value: vertex as f64,
+                requirement: "a baseline vertex, before any lead-in is set",
+            });
+        }
+        let mut ring = base[vertex..m].to_vec();
+        ring.extend_from_slice(&base[..vertex]);
+        let baseline = Baseline::from_points(ring)?;
+        let first = baseline.points()[0];
+        let n = self.surface_points.len();
+        let nearest = (0..n)
+            .min_by(|&a, &b| {
+                (self.surface_points[a] - first)
+                    .norm()
+                    .total_cmp(&(self.surface_points[b] - first).norm())
+            })
+            .unwrap_or(0);
+        self.surface_points.rotate_left(nearest);
+        self.surface = Panels::from_points(&self.surface_points)?;
+        self.surface_shift = (self.surface_shift + nearest) % n;
+        self.trajectory = Trajectory::with_ends(
+            baseline,
+            self.objective.control_points,
+            self.objective.ends,
+            self.objective.spacing,
+        )?;
+        self.segment_u = self
+            .trajectory
+            .parameters()
+            .windows(2)
+            .map(|w| 0.5 * (w[0] + w[1]))
+            .collect();
+        self.resolve_cse()?;
+        Ok(self)
+    }
+
+    /// Per-panel values of this problem (in its cutting order) in trailing-edge order: the
+    /// order of the foil's surface from vertex 0.
+    pub fn trailing_edge_order(&self, values: &[f64]) -> Vec<f64> {
+        let mut out = values.to_vec();
+        if !out.is_empty() {
+            let shift = self.surface_shift % out.len();
+            out.rotate_right(shift);
+        }
+        out
     }
 
     /// The same problem with a straight lead-in from `start` to the path's first point: its
@@ -843,5 +915,59 @@ impl Problem {
         out.extend(scratch.exposure.iter().map(|e| (e - self.cse) * scale));
         self.regularisation_into(controls, out);
         out.iter().all(|r| r.is_finite())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::airfoil::test_foil;
+    use crate::exposure::Causal;
+
+    fn problem(model: ExposureModel) -> Problem {
+        let foil = test_foil("e387", 200.0);
+        let baseline = Baseline::fixed_offset(&foil, 0.5, 120).unwrap();
+        let objective = Objective {
+            model,
+            feed: None,
+            ..Objective::default()
+        };
+        Problem::new(&foil, 80, baseline, objective).unwrap()
+    }
+
+    /// Without the causal mask the closed baseline heats every panel the same wherever the
+    /// wire enters, so a restarted problem's exposure, put back in trailing-edge order, is the
+    /// original's; with the mask it differs (the cutting order matters), and the restarted
+    /// surface begins next to the new entry.
+    #[test]
+    fn entering_elsewhere_restarts_path_and_surface_together() {
+        let off = ExposureModel {
+            causal: Causal::Off,
+            ..ExposureModel::default()
+        };
+        let zero = vec![0.0; 32];
+        let original = problem(off).exposure(&zero).unwrap();
+        for vertex in [0, 37, 90] {
+            let p = problem(off).entering_at(vertex).unwrap();
+            let back = p.trailing_edge_order(&p.exposure(&zero).unwrap());
+            for (i, (a, b)) in original.iter().zip(&back).enumerate() {
+                assert!((a - b).abs() <= 1e-3 * a.abs().max(1.0), "{vertex} {i}: {a} {b}");
+            }
+            let first = p.trajectory().baseline().points()[0];
+            assert!((p.surface().midpoint(0) - first).norm() < 10.0, "{vertex}");
+        }
+        let masked = problem(ExposureModel::default());
+        let e0 = masked.exposure(&zero).unwrap();
+        let restarted = problem(ExposureModel::default()).entering_at(60).unwrap();
+        let e1 = restarted.trailing_edge_order(&restarted.exposure(&zero).unwrap());
+        assert!(e0.iter().zip(&e1).any(|(a, b)| (a - b).abs() > 0.1));
+        // A vertex past the baseline, or after a lead-in, is refused by name.
+        let n = masked.trajectory().baseline().points().len();
+        let e = problem(off).entering_at(n).unwrap_err();
+        assert!(e.to_string().starts_with("entry_vertex"), "{e}");
+        let with_lead = problem(off)
+            .with_lead_in(Point2::new(215.0, 0.0))
+            .unwrap();
+        assert!(with_lead.entering_at(3).is_err());
     }
 }
