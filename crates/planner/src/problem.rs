@@ -951,7 +951,10 @@ mod tests {
             let p = problem(off).entering_at(vertex).unwrap();
             let back = p.trailing_edge_order(&p.exposure(&zero).unwrap());
             for (i, (a, b)) in original.iter().zip(&back).enumerate() {
-                assert!((a - b).abs() <= 1e-3 * a.abs().max(1.0), "{vertex} {i}: {a} {b}");
+                assert!(
+                    (a - b).abs() <= 1e-3 * a.abs().max(1.0),
+                    "{vertex} {i}: {a} {b}"
+                );
             }
             let first = p.trajectory().baseline().points()[0];
             assert!((p.surface().midpoint(0) - first).norm() < 10.0, "{vertex}");
@@ -965,9 +968,7 @@ mod tests {
         let n = masked.trajectory().baseline().points().len();
         let e = problem(off).entering_at(n).unwrap_err();
         assert!(e.to_string().starts_with("entry_vertex"), "{e}");
-        let with_lead = problem(off)
-            .with_lead_in(Point2::new(215.0, 0.0))
-            .unwrap();
+        let with_lead = problem(off).with_lead_in(Point2::new(215.0, 0.0)).unwrap();
         assert!(with_lead.entering_at(3).is_err());
     }
 }
