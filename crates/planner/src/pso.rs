@@ -171,8 +171,11 @@ impl PsoConfig {
 /// v ← w·v + c_cog·r₁·(p_best − x) + c_soc·r₂·(g_best − x), x ← x + v; then x is evaluated and the
 /// personal and global bests updated (strict improvement; ties keep the older best). Every
 /// `restart_every` iterations all particles restart at the global best with fresh random
-/// velocities and their personal bests reset to it. Random numbers are drawn serially from
-/// one [`ChaCha8Rng`] seeded with `config.seed`, so runs are reproducible bit for bit.
+/// velocities (±`restart_velocity_mm`) and their personal bests reset to it. Not in the paper:
+/// a coordinate that leaves [`Problem::bounds`] stops on the bound with zero velocity, and the
+/// run ends early once the best stalls ([`PsoConfig::stall_iterations`]). Random numbers are
+/// drawn serially from one [`ChaCha8Rng`] seeded with `config.seed`, so runs are reproducible
+/// bit for bit.
 ///
 /// `progress` is called after every iteration; returning [`ControlFlow::Break`] stops the run
 /// (the result so far is returned with `cancelled = true`).
