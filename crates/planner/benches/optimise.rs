@@ -1,5 +1,5 @@
-//! The full default optimisation (seed 000 §IV.C: 20 particles, 8000 iterations, restart every
-//! 200) of the default job (S1223, chord 200 mm, H-grade EPS, kerf-model offset) at N = 100,
+//! The full default optimisation (seed 000 §IV.C: 20 particles, up to 8000 iterations with the
+//! stall stop, restart every 200, then the refinement) of the default job (S1223, chord 200 mm, H-grade EPS, kerf-model offset) at N = 100,
 //! 200 and 400 panels through `cell_planner::job::plan`: wall seconds, iterations/s, baseline
 //! and final loss, baseline vs optimised RMS(E − CSE) and max |E − CSE|. First, per N, the
 //! cost of one loss evaluation broken down by stage (single-threaded).
