@@ -19,10 +19,46 @@ use ros2_client::{
 async fn effective_parameters_are_listed_and_readable_remotely() {
     let domain = fresh_domain();
     let mut setup = NodeSetup::local("monitor", domain);
-    setup.args =
-        NodeArgs::parse(["--ros-args", "-r", "__ns:=/cell", "-p", "timeout_s:=12.5"]).unwrap();
-    let (_node, params) = CellNode::with_params::<MonitorParams>(setup).unwrap();
+    // A bringup's shared file: the ROS-standard keys every ROS 2 node accepts (issue 22).
+    let shared = std::env::temp_dir().join(format!("cell-shared-{}.yaml", std::process::id()));
+    std::fs::write(
+        &shared,
+        "/**:\n  ros__parameters:\n    use_sim_time: false\n    \
+         start_type_description_service: true\n    qos_overrides:\n      \
+         /cell/toolpath:\n        subscription:\n          depth: 5\n",
+    )
+    .unwrap();
+    setup.args = NodeArgs::parse([
+        "--ros-args",
+        "-r",
+        "__ns:=/cell",
+        "--params-file",
+        shared.to_str().unwrap(),
+        "-p",
+        "timeout_s:=12.5",
+    ])
+    .unwrap();
+    let (node, params) = CellNode::with_params::<MonitorParams>(setup).unwrap();
+    let _ = std::fs::remove_file(&shared);
     assert_eq!(params.timeout_s, 12.5);
+    assert!(!node.standard_params().use_sim_time);
+    let depth = |endpoint| {
+        node.qos(
+            "/cell/toolpath",
+            endpoint,
+            ros2_client::QosProfile::publisher_default(),
+        )
+        .history
+    };
+    use cell_runtime::standard_params::Endpoint;
+    assert_eq!(
+        depth(Endpoint::Subscription),
+        ros2_client::qos::History::KeepLast { depth: 5 }
+    );
+    assert_ne!(
+        depth(Endpoint::Publisher),
+        ros2_client::qos::History::KeepLast { depth: 5 }
+    );
 
     // An independent ros2-client node, as `ros2 param` would be.
     let participant = DomainParticipantBuilder::new(domain)
@@ -81,7 +117,12 @@ async fn effective_parameters_are_listed_and_readable_remotely() {
     .await
     .expect("in time")
     .expect("list_parameters");
-    for name in ["expect_toolpaths", "expect_heat_maps", "timeout_s"] {
+    for name in [
+        "expect_toolpaths",
+        "expect_heat_maps",
+        "timeout_s",
+        "use_sim_time",
+    ] {
         assert!(
             listed.result.names.iter().any(|n| n == name),
             "{name} not in {:?}",
@@ -91,7 +132,11 @@ async fn effective_parameters_are_listed_and_readable_remotely() {
     let values = tokio::time::timeout(
         DELIVERY_TIMEOUT,
         get.async_call_service(GetParametersRequest {
-            names: vec!["timeout_s".into(), "expect_toolpaths".into()],
+            names: vec![
+                "timeout_s".into(),
+                "expect_toolpaths".into(),
+                "use_sim_time".into(),
+            ],
         }),
     )
     .await
@@ -103,7 +148,8 @@ async fn effective_parameters_are_listed_and_readable_remotely() {
         values,
         [
             ros2_client::ParameterValue::Double(12.5),
-            ros2_client::ParameterValue::Integer(0)
+            ros2_client::ParameterValue::Integer(0),
+            ros2_client::ParameterValue::Boolean(false)
         ]
     );
 

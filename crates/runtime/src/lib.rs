@@ -25,6 +25,7 @@ pub mod qos;
 pub mod rerun_sink;
 pub mod service;
 pub mod shutdown;
+pub mod standard_params;
 
 use std::{future::Future, process::ExitCode};
 

@@ -7,7 +7,7 @@ use std::{
 };
 
 use anyhow::{anyhow, bail, Context as _};
-use ros2_client::{dds::rustdds::DomainParticipantBuilder, Context, NodeName};
+use ros2_client::{dds::rustdds::DomainParticipantBuilder, qos::QosProfile, Context, NodeName};
 use serde::de::DeserializeOwned;
 
 use crate::{
@@ -16,6 +16,7 @@ use crate::{
     params::ParamSources,
     rerun_sink::{RerunSink, RerunTarget},
     shutdown::Shutdown,
+    standard_params::{Endpoint, StandardParams},
 };
 
 /// Which network interfaces DDS may use.
@@ -173,12 +174,24 @@ fn default_run_id() -> String {
     )
 }
 
+/// The node's parameter sources for its name and namespace, with the ROS-standard keys taken
+/// out ([`StandardParams::take`]).
+fn collect_params(setup: &NodeSetup) -> anyhow::Result<(ParamSources, StandardParams)> {
+    let ros = &setup.args.ros;
+    let name = ros.node_name.as_deref().unwrap_or(&setup.default_name);
+    let namespace = ros.namespace.as_deref().unwrap_or("/");
+    let mut sources = ParamSources::collect(ros, namespace, name)?;
+    let standard = StandardParams::take(&mut sources)?;
+    Ok((sources, standard))
+}
+
 struct NodeInner {
     name: String,
     namespace: String,
     domain_id: u16,
     remaps: Vec<(String, String)>,
     params: ParamSources,
+    standard: StandardParams,
     ros_node: Mutex<ros2_client::Node>,
     _context: Context,
     fast_path: Option<FastPath>,
@@ -206,7 +219,8 @@ impl CellNode {
     /// Brings the node up: one DDS participant of its own, the ROS graph spinner, the fast path
     /// (or the reason it is off) and the Rerun sink. Must run inside a tokio runtime.
     pub fn new(setup: NodeSetup) -> anyhow::Result<Self> {
-        Self::build(setup, Vec::new())
+        let (sources, standard) = collect_params(&setup)?;
+        Self::build(setup, Vec::new(), sources, standard)
     }
 
     /// Like [`CellNode::new`], and also validates the parameters into `P` and declares their
@@ -216,26 +230,30 @@ impl CellNode {
     where
         P: serde::Serialize + DeserializeOwned,
     {
-        let ros = &setup.args.ros;
-        let name = ros.node_name.as_deref().unwrap_or(&setup.default_name);
-        let namespace = ros.namespace.as_deref().unwrap_or("/");
-        let params: P = ParamSources::collect(ros, namespace, name)?.parse()?;
+        let (sources, standard) = collect_params(&setup)?;
+        let params: P = sources.parse()?;
         let effective = serde_norway::to_value(&params).context("parameters")?;
         let mut declared = Vec::new();
         crate::params::flatten_for_ros("", &effective, &mut declared);
-        Ok((Self::build(setup, declared)?, params))
+        Ok((Self::build(setup, declared, sources, standard)?, params))
     }
 
     fn build(
         setup: NodeSetup,
-        declared: Vec<(String, ros2_client::ParameterValue)>,
+        mut declared: Vec<(String, ros2_client::ParameterValue)>,
+        params: ParamSources,
+        standard: StandardParams,
     ) -> anyhow::Result<Self> {
         let ros = &setup.args.ros;
         let name = ros.node_name.clone().unwrap_or(setup.default_name.clone());
         let namespace = ros.namespace.clone().unwrap_or_else(|| "/".to_string());
         let node_name = NodeName::new(&namespace, &name)
             .map_err(|e| anyhow!("node name {namespace}/{name}: {e:?}"))?;
-        let params = ParamSources::collect(ros, &namespace, &name)?;
+        // ROS 2 declares use_sim_time on every node.
+        declared.push((
+            "use_sim_time".into(),
+            ros2_client::ParameterValue::Boolean(standard.use_sim_time),
+        ));
 
         let mut participant = DomainParticipantBuilder::new(setup.domain_id);
         match &setup.network {
@@ -301,6 +319,7 @@ impl CellNode {
                 domain_id: setup.domain_id,
                 remaps: ros.remaps.clone(),
                 params,
+                standard,
                 ros_node: Mutex::new(ros_node),
                 _context: context,
                 fast_path,
@@ -308,6 +327,18 @@ impl CellNode {
                 shutdown: setup.shutdown,
             }),
         })
+    }
+
+    /// `profile` with the node's `qos_overrides` parameters for `topic` (fully qualified) and
+    /// `endpoint` applied ([`StandardParams::qos`]).
+    pub fn qos(&self, topic: &str, endpoint: Endpoint, profile: QosProfile) -> QosProfile {
+        self.inner.standard.qos(topic, endpoint, profile)
+    }
+
+    /// The ROS-standard parameters the node was started with (`use_sim_time`, QoS
+    /// overrides).
+    pub fn standard_params(&self) -> &StandardParams {
+        &self.inner.standard
     }
 
     /// The node's base name.

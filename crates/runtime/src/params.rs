@@ -161,6 +161,23 @@ impl ParamSources {
         self.origins.insert(key.to_string(), origin.to_string());
     }
 
+    /// Removes the top-level key `key` (with everything below it) and returns its value and
+    /// where it came from (the origin of one of its leaves: the first in key order).
+    pub fn take(&mut self, key: &str) -> Option<(Value, String)> {
+        let value = self.merged.remove(Value::String(key.to_string()))?;
+        let below = format!("{key}.");
+        let origin = self
+            .origins
+            .iter()
+            .filter(|(k, _)| k.as_str() == key || k.starts_with(&below))
+            .min_by(|a, b| a.0.cmp(b.0))
+            .map(|(_, o)| o.clone())
+            .unwrap_or_else(|| "parameters".to_string());
+        self.origins
+            .retain(|k, _| !(k.as_str() == key || k.starts_with(&below)));
+        Some((value, origin))
+    }
+
     /// The merged parameters as one YAML mapping.
     pub fn merged(&self) -> &Mapping {
         &self.merged

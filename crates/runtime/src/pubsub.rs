@@ -31,6 +31,7 @@ use crate::{
     fastpath::{FastPublisher, FastSubscriber, Frame},
     node::CellNode,
     qos::QosPreset,
+    standard_params::Endpoint,
 };
 
 /// How a message reached a subscriber.
@@ -75,7 +76,7 @@ impl<T: RosMessage> Publisher<T> {
     /// Creates a publisher on `topic` (resolved against namespace and remappings).
     pub fn new(node: &CellNode, topic: &str, qos: QosPreset) -> anyhow::Result<Self> {
         let (resolved, name) = topic_name(node, topic)?;
-        let profile = qos.profile();
+        let profile = node.qos(&resolved, Endpoint::Publisher, qos.profile());
         let dds = node.with_ros_node(|n| {
             let t = n.create_topic(&name, type_name::<T>(), &profile)?;
             n.create_publisher::<Arc<T>>(&t, Some(profile.clone()))
@@ -243,7 +244,7 @@ impl<T: RosMessage> Subscriber<T> {
     /// Subscribes to `topic` (resolved against namespace and remappings).
     pub fn new(node: &CellNode, topic: &str, qos: QosPreset) -> anyhow::Result<Self> {
         let (resolved, name) = topic_name(node, topic)?;
-        let profile = qos.profile();
+        let profile = node.qos(&resolved, Endpoint::Subscription, qos.profile());
         let dds = node.with_ros_node(|n| {
             let t = n.create_topic(&name, type_name::<T>(), &profile)?;
             n.create_subscription::<T>(&t, Some(profile.clone()))
