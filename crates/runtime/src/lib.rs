@@ -23,6 +23,7 @@ pub mod params;
 pub mod pubsub;
 pub mod qos;
 pub mod rerun_sink;
+pub mod rosout;
 pub mod service;
 pub mod shutdown;
 pub mod standard_params;

@@ -37,9 +37,18 @@ pub fn init(default_level: Option<&str>) {
         eprintln!("warning: ignoring bad log filter {directives:?}: {e}");
         EnvFilter::new(format!("info,{QUIET_DEPENDENCIES}"))
     });
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none())
+    use tracing_subscriber::layer::SubscriberExt as _;
+    use tracing_subscriber::util::SubscriberInitExt as _;
+    let _ = tracing_subscriber::registry()
+        .with(filter)
+        .with(
+            tracing_subscriber::fmt::layer()
+                .with_writer(std::io::stderr)
+                .with_ansi(
+                    std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none(),
+                ),
+        )
+        // What passes the filter also goes to /rosout (crate::rosout).
+        .with(crate::rosout::RosoutLayer)
         .try_init();
 }

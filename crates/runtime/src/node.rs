@@ -286,6 +286,10 @@ impl CellNode {
             .new_node(node_name, options)
             .map_err(|e| anyhow!("creating node {name}: {e:?}"))?;
         sealed.store(true, std::sync::atomic::Ordering::Relaxed);
+        {
+            use ros2_client::dds::RosoutRaw as _;
+            crate::rosout::register(&name, ros_node.rosout_writer());
+        }
         let spinner = ros_node
             .spinner()
             .map_err(|e| anyhow!("node spinner: {e:?}"))?;

@@ -1,0 +1,116 @@
+//! `/rosout` (issue 22, item 5): the log events a node's filter lets through (`RUST_LOG` or
+//! `--log-level`, [`crate::logging::init`]) are also published on `/rosout` as
+//! `rcl_interfaces/msg/Log`, so `rqt_console`, `ros2 topic echo /rosout` and Foxglove's log
+//! panel show them.
+//!
+//! `tracing` has one global subscriber per process, so the forwarding is a `tracing` layer
+//! ([`RosoutLayer`]) over a process-wide list of the live nodes' rosout writers: each
+//! [`crate::CellNode`] registers its writer when it comes up, and an event goes out once per
+//! live node, under that node's name. Events of the DDS stack itself (`rustdds`,
+//! `ros2_client`) are not forwarded: publishing them would log again.
+
+use std::cell::Cell;
+use std::fmt::Write as _;
+use std::sync::{Arc, Mutex, OnceLock, Weak};
+
+use ros2_client::log::Log;
+use ros2_client::Publisher;
+use tracing::field::{Field, Visit};
+use tracing::{Event, Level, Subscriber};
+use tracing_subscriber::layer::{Context, Layer};
+
+type Writer = Option<Publisher<Log>>;
+
+/// Node name and rosout writer of every node that came up in this process.
+type Registry = Mutex<Vec<(String, Weak<Writer>)>>;
+
+/// The live nodes' names and rosout writers.
+fn writers() -> &'static Registry {
+    static WRITERS: OnceLock<Registry> = OnceLock::new();
+    WRITERS.get_or_init(|| Mutex::new(Vec::new()))
+}
+
+thread_local! {
+    /// Set while an event is being published, so logging from inside the publish is dropped.
+    static FORWARDING: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Registers node `name`'s rosout writer; it is dropped from the list when the node goes.
+pub(crate) fn register(name: &str, writer: Arc<Writer>) {
+    let mut list = writers().lock().unwrap_or_else(|p| p.into_inner());
+    list.retain(|(_, w)| w.strong_count() > 0);
+    list.push((name.to_string(), Arc::downgrade(&writer)));
+}
+
+/// The layer [`crate::logging::init`] installs (module docs).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct RosoutLayer;
+
+/// Collects an event's message and its other fields (`key=value`) as one line.
+#[derive(Default)]
+struct Line(String);
+
+impl Visit for Line {
+    fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+        if field.name() == "message" {
+            let rest = std::mem::take(&mut self.0);
+            let _ = write!(self.0, "{value:?}{rest}");
+        } else {
+            let _ = write!(self.0, " {}={value:?}", field.name());
+        }
+    }
+
+    fn record_str(&mut self, field: &Field, value: &str) {
+        if field.name() == "message" {
+            let rest = std::mem::take(&mut self.0);
+            self.0 = format!("{value}{rest}");
+        } else {
+            let _ = write!(self.0, " {}={value}", field.name());
+        }
+    }
+}
+
+impl<S: Subscriber> Layer<S> for RosoutLayer {
+    fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
+        let meta = event.metadata();
+        let target = meta.target();
+        if target.starts_with("rustdds") || target.starts_with("ros2_client") {
+            return;
+        }
+        if FORWARDING.with(Cell::get) {
+            return;
+        }
+        let live: Vec<(String, Arc<Writer>)> = {
+            let list = writers().lock().unwrap_or_else(|p| p.into_inner());
+            list.iter()
+                .filter_map(|(name, w)| w.upgrade().map(|w| (name.clone(), w)))
+                .collect()
+        };
+        if live.is_empty() {
+            return;
+        }
+        let mut line = Line::default();
+        event.record(&mut line);
+        let level = match *meta.level() {
+            Level::ERROR => Log::ERROR,
+            Level::WARN => Log::WARN,
+            Level::INFO => Log::INFO,
+            _ => Log::DEBUG,
+        };
+        FORWARDING.with(|f| f.set(true));
+        for (name, writer) in live {
+            if let Some(publisher) = writer.as_ref() {
+                let _ = publisher.publish(Log {
+                    stamp: ros2_client::builtin_interfaces::Time::now(),
+                    level,
+                    name,
+                    msg: line.0.clone(),
+                    file: meta.file().unwrap_or_default().to_string(),
+                    function: target.to_string(),
+                    line: meta.line().unwrap_or(0),
+                });
+            }
+        }
+        FORWARDING.with(|f| f.set(false));
+    }
+}
