@@ -45,12 +45,7 @@ fn breakdown(panels: usize, offset_mm: f64) {
         .normalised()
         .scaled(200.0)
         .unwrap();
-    let probe = foil.resampled_cosine(panels).unwrap();
-    let surface_points = if probe.points().first() == probe.points().last() {
-        panels + 1
-    } else {
-        panels
-    };
+    let surface_points = cell_planner::job::surface_points(&foil, panels).unwrap();
     let baseline = Baseline::fixed_offset(&foil, offset_mm, panels + panels / 2).unwrap();
     let objective = Objective::default();
     let problem = Problem::new(&foil, surface_points, baseline, objective).unwrap();

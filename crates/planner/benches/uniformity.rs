@@ -20,7 +20,9 @@ use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cell_planner::job::{lead_in_start, plan, AirfoilSource, ExposureStats, HotwireJob};
+use cell_planner::job::{
+    lead_in_start, plan, surface_points, AirfoilSource, ExposureStats, HotwireJob,
+};
 use cell_planner::pso::{optimise, Objective, Problem, PsoConfig};
 use cell_planner::trajectory::{clearance_mm, Baseline};
 
@@ -175,44 +177,17 @@ fn entries(foils: &[PathBuf], panels: usize) {
     println!("| foil | trailing edge | upper middle | leading edge | lower middle |\n|---|---|---|---|---|");
     for path in three_or_named(foils, "ENTRY_FOILS") {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
-        let job = HotwireJob {
-            root_airfoil: AirfoilSource::File(path.clone()),
-            ..HotwireJob::default()
-        };
-        let foil = job
-            .root_airfoil
-            .load()
-            .unwrap()
-            .normalised()
-            .scaled(200.0)
-            .unwrap();
-        let offset = plan(
-            &HotwireJob {
-                pso: PsoConfig {
-                    iterations: 0,
-                    ..PsoConfig::default()
-                },
-                ..job.clone()
-            },
-            |_| ControlFlow::Continue(()),
-        )
-        .expect("plan")
-        .root
-        .offset_mm;
-        let baseline = Baseline::fixed_offset(&foil, offset, panels + panels / 2).unwrap();
+        let Section {
+            job,
+            foil,
+            offset,
+            baseline,
+            surface_points,
+        } = section(&path, panels);
         let m = baseline.points().len() - 1;
         let le = (0..m)
             .min_by(|&a, &b| baseline.points()[a].x.total_cmp(&baseline.points()[b].x))
             .unwrap();
-        let surface_points = {
-            let probe = foil.resampled_cosine(panels).unwrap();
-            let p = probe.points();
-            if p.first() == p.last() {
-                panels + 1
-            } else {
-                panels
-            }
-        };
         let mut cells = Vec::new();
         for vertex in [0, le / 2, le, (le + m) / 2] {
             let problem = Problem::new(
@@ -226,7 +201,7 @@ fn entries(foils: &[PathBuf], panels: usize) {
             let b = problem.trajectory().baseline();
             let (first, normal) = (b.points()[0], b.normals()[0]);
             let start = match vertex {
-                0 => lead_in_start(&foil, job.lead_in_mm, offset),
+                0 => lead_in_start(foil.points(), job.lead_in_mm, offset),
                 v if v == le => first - Vector2::new(job.lead_in_mm, 0.0),
                 _ => first + normal * job.lead_in_mm,
             };
@@ -395,6 +370,55 @@ fn ladder(foils: &[PathBuf], panels: usize) {
     }
 }
 
+/// One foil's default job at `panels` panels and what the optimiser starts from.
+struct Section {
+    job: HotwireJob,
+    /// Normalised, scaled to 200 mm.
+    foil: cell_planner::airfoil::Airfoil,
+    /// The job's kerf-model offset (mm).
+    offset: f64,
+    /// The fixed-offset baseline at the job's resolution.
+    baseline: Baseline,
+    /// Resampled points for `panels` surface panels.
+    surface_points: usize,
+}
+
+fn section(path: &Path, panels: usize) -> Section {
+    let job = HotwireJob {
+        root_airfoil: AirfoilSource::File(path.to_path_buf()),
+        panels,
+        ..HotwireJob::default()
+    };
+    // The job's offset, from a plan with no swarm iterations.
+    let quick = HotwireJob {
+        pso: PsoConfig {
+            iterations: 0,
+            ..PsoConfig::default()
+        },
+        ..job.clone()
+    };
+    let offset = plan(&quick, |_| ControlFlow::Continue(()))
+        .expect("plan")
+        .root
+        .offset_mm;
+    let foil = job
+        .root_airfoil
+        .load()
+        .unwrap()
+        .normalised()
+        .scaled(200.0)
+        .unwrap();
+    let baseline = Baseline::fixed_offset(&foil, offset, panels + panels / 2).unwrap();
+    let surface_points = surface_points(&foil, panels).unwrap();
+    Section {
+        job,
+        foil,
+        offset,
+        baseline,
+        surface_points,
+    }
+}
+
 /// The paper's swarm (constant feed, no refinement) here and in NumPy on the same problems.
 fn peer_rows(foils: &[PathBuf], panels: usize) {
     let iterations: usize = std::env::var("PEER_ITERATIONS")
@@ -408,46 +432,18 @@ fn peer_rows(foils: &[PathBuf], panels: usize) {
     );
     for path in picks {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
-        let job = HotwireJob {
-            root_airfoil: AirfoilSource::File(path.clone()),
-            panels,
-            ..HotwireJob::default()
-        };
-        // The job's kerf-model offset, from a plan with one iteration.
-        let quick = HotwireJob {
-            pso: PsoConfig {
-                iterations: 1,
-                particles: 1,
-                ..PsoConfig::default()
-            },
-            ..job.clone()
-        };
-        let offset = plan(&quick, |_| ControlFlow::Continue(()))
-            .expect("plan")
-            .root
-            .offset_mm;
-        let foil = job
-            .root_airfoil
-            .load()
-            .unwrap()
-            .normalised()
-            .scaled(200.0)
-            .unwrap();
-        let baseline = Baseline::fixed_offset(&foil, offset, panels + panels / 2).unwrap();
+        let Section {
+            job,
+            foil,
+            offset,
+            baseline,
+            surface_points,
+        } = section(&path, panels);
         let objective = Objective {
             feed: None,
             ..Objective::default()
         };
-        let surface_points = {
-            let probe = foil.resampled_cosine(panels).unwrap();
-            let p = probe.points();
-            if p.first() == p.last() {
-                panels + 1
-            } else {
-                panels
-            }
-        };
-        let start = lead_in_start(&foil, job.lead_in_mm, offset);
+        let start = lead_in_start(foil.points(), job.lead_in_mm, offset);
         let problem = Problem::new(&foil, surface_points, baseline.clone(), objective)
             .unwrap()
             .with_lead_in(start)

@@ -24,7 +24,7 @@
 use nalgebra::Point2;
 
 use crate::airfoil::Airfoil;
-use crate::exposure::{ExposureModel, Panels, WireSegments};
+use crate::exposure::{ExposureError, ExposureModel, Panels, WireSegments};
 use crate::pso::PsoError;
 use crate::spline::SplineEnds;
 use crate::trajectory::{is_feasible, Baseline, ControlSpacing, OutlineGrid, Trajectory};
@@ -205,9 +205,6 @@ pub struct Problem {
     /// Where the lead-in starts; it runs straight to the path's first point (which moves with
     /// the controls). `None`: the wire starts on the path (the paper's set-up).
     lead_in_start: Option<Point2<f64>>,
-    /// The model with the causal mask off, for the lead-in: the wire is on it before it cuts
-    /// any panel, so all of it counts for every panel.
-    lead_model: ExposureModel,
     /// A feed ratio per wire segment set from outside ([`Problem::with_feed_profile`]), used
     /// when the feed is not a design variable.
     fixed_feed: Option<Vec<(f64, f64)>>,
@@ -324,18 +321,7 @@ impl Problem {
             crate::trajectory::clearance_mm(baseline.points(), &outline, f64::INFINITY)
                 - objective.min_clearance_mm
                 - 1e-9;
-        let trajectory = Trajectory::with_ends(
-            baseline,
-            objective.control_points,
-            objective.ends,
-            objective.spacing,
-        )?;
-        // The feed spline's parameter at each wire segment's middle.
-        let segment_u = trajectory
-            .parameters()
-            .windows(2)
-            .map(|w| 0.5 * (w[0] + w[1]))
-            .collect();
+        let (trajectory, segment_u) = parameterise(baseline, &objective)?;
         let mut p = Self {
             grid: OutlineGrid::new(&outline),
             free_displacement_mm,
@@ -349,10 +335,6 @@ impl Problem {
             lead_in_start: None,
             fixed_feed: None,
             lead_in_reach: None,
-            lead_model: ExposureModel {
-                causal: crate::exposure::Causal::Off,
-                ..objective.model
-            },
         };
         p.resolve_cse()?;
         Ok(p)
@@ -362,18 +344,19 @@ impl Problem {
     /// vertex 0 (the trailing edge): the baseline and the surface are both restarted there
     /// (the surface at its corner nearest the new first path point), so the causal mask's
     /// search window follows the new cutting order. Exposures stay in this order;
-    /// [`Problem::trailing_edge_order`] puts them back. Call before adding a lead-in.
+    /// [`Problem::trailing_edge_order`] puts them back. Call before adding a lead-in or a feed
+    /// profile.
     ///
     /// # Errors
     /// `vertex` past the baseline; a lead-in already set.
     pub fn entering_at(mut self, vertex: usize) -> Result<Self, PsoError> {
         let base = self.trajectory.baseline().points();
         let m = base.len() - 1;
-        if vertex >= m || self.lead_in_start.is_some() {
+        if vertex >= m || self.lead_in_start.is_some() || self.fixed_feed.is_some() {
             return Err(PsoError::InvalidParameter {
                 name: "entry_vertex",
                 value: vertex as f64,
-                requirement: "a baseline vertex, before any lead-in is set",
+                requirement: "a baseline vertex, before any lead-in or feed profile is set",
             });
         }
         let mut ring = base[vertex..m].to_vec();
@@ -391,18 +374,7 @@ impl Problem {
         self.surface_points.rotate_left(nearest);
         self.surface = Panels::from_points(&self.surface_points)?;
         self.surface_shift = (self.surface_shift + nearest) % n;
-        self.trajectory = Trajectory::with_ends(
-            baseline,
-            self.objective.control_points,
-            self.objective.ends,
-            self.objective.spacing,
-        )?;
-        self.segment_u = self
-            .trajectory
-            .parameters()
-            .windows(2)
-            .map(|w| 0.5 * (w[0] + w[1]))
-            .collect();
+        (self.trajectory, self.segment_u) = parameterise(baseline, &self.objective)?;
         self.resolve_cse()?;
         Ok(self)
     }
@@ -649,16 +621,6 @@ impl Problem {
         }
     }
 
-    /// Repeats the last segment's value for the join ([`Problem::path`]).
-    fn with_join<T: Copy>(&self, mut per_segment: Vec<T>) -> Vec<T> {
-        if self.objective.ends == SplineEnds::Open {
-            if let Some(&last) = per_segment.last() {
-                per_segment.push(last);
-            }
-        }
-        per_segment
-    }
-
     /// The feed ratio ρ of each wire segment for `controls` (all 1 without a feed variable;
     /// the given profile's with [`Problem::with_feed_profile`]).
     pub fn feed_ratios(&self, controls: &[f64]) -> Vec<f64> {
@@ -679,42 +641,39 @@ impl Problem {
 
     /// (ρ, γ) of each wire segment.
     fn settings(&self, controls: &[f64]) -> Vec<(f64, f64)> {
-        let k = self.trajectory.control_points();
-        let per_segment = match (self.objective.feed, &self.fixed_feed) {
-            (Some(f), _) if controls.len() > k => {
-                let ends = self.objective.ends;
-                let g = self.feed_controls(controls);
-                self.segment_u
-                    .iter()
-                    .map(|&u| f.setting(ends, g, u))
-                    .collect()
-            }
-            (_, Some(fixed)) => fixed.clone(),
-            _ => vec![(1.0, 1.0); self.segment_u.len()],
-        };
-        self.with_join(per_segment)
+        let mut out = Vec::with_capacity(self.segment_u.len() + 1);
+        self.for_each_setting(controls, |rho, gamma| out.push((rho, gamma)));
+        out
     }
 
     /// The heat weight q = γ²/ρ of each wire segment ([`FeedVariable`]) into `out`.
     fn feed_weights_into(&self, controls: &[f64], out: &mut Vec<f64>) {
         out.clear();
+        self.for_each_setting(controls, |rho, gamma| out.push(gamma * gamma / rho));
+    }
+
+    /// Calls `each(ρ, γ)` for every wire segment in order: from the feed variable, else the
+    /// given profile ([`Problem::with_feed_profile`]), else (1, 1); with open spline ends the
+    /// closing join ([`Problem::path`]) repeats the last segment's setting.
+    fn for_each_setting(&self, controls: &[f64], mut each: impl FnMut(f64, f64)) {
         let k = self.trajectory.control_points();
+        let mut last = (1.0, 1.0);
+        let mut emit = |setting: (f64, f64)| {
+            last = setting;
+            each(setting.0, setting.1);
+        };
         match (self.objective.feed, &self.fixed_feed) {
             (Some(f), _) if controls.len() > k => {
-                let ends = self.objective.ends;
-                let g = self.feed_controls(controls);
-                out.extend(self.segment_u.iter().map(|&u| {
-                    let (rho, gamma) = f.setting(ends, g, u);
-                    gamma * gamma / rho
-                }))
+                let (ends, g) = (self.objective.ends, self.feed_controls(controls));
+                for &u in &self.segment_u {
+                    emit(f.setting(ends, g, u));
+                }
             }
-            (_, Some(fixed)) => out.extend(fixed.iter().map(|(rho, gamma)| gamma * gamma / rho)),
-            _ => out.resize(self.segment_u.len(), 1.0),
+            (_, Some(fixed)) => fixed.iter().for_each(|&setting| emit(setting)),
+            _ => self.segment_u.iter().for_each(|_| emit((1.0, 1.0))),
         }
         if self.objective.ends == SplineEnds::Open {
-            if let Some(&last) = out.last() {
-                out.push(last);
-            }
+            each(last.0, last.1);
         }
     }
 
@@ -747,13 +706,14 @@ impl Problem {
             .model
             .exposure_into(&self.surface, &wire, &mut out)?;
         if let Some(start) = self.lead_start(controls) {
-            let lead = WireSegments::from_points(&[start, self.path(controls)[0]])?;
-            let mut extra = vec![0.0; out.len()];
-            self.lead_model
-                .exposure_into(&self.surface, &lead, &mut extra)?;
-            for (e, x) in out.iter_mut().zip(&extra) {
-                *e += x;
-            }
+            add_lead_in_exposure(
+                &self.objective.model,
+                &self.surface,
+                &[start, self.path(controls)[0]],
+                &mut WireSegments::default(),
+                &mut Vec::new(),
+                &mut out,
+            )?;
         }
         Ok(out)
     }
@@ -831,24 +791,17 @@ impl Problem {
             if !self
                 .grid
                 .is_feasible(&scratch.lead, self.objective.min_clearance_mm)
-                || scratch.lead_wire.set(&scratch.lead).is_err()
-            {
-                return false;
-            }
-            scratch.lead_exposure.resize(self.surface.len(), 0.0);
-            if self
-                .lead_model
-                .exposure_into(
+                || add_lead_in_exposure(
+                    &self.objective.model,
                     &self.surface,
-                    &scratch.lead_wire,
+                    &scratch.lead,
+                    &mut scratch.lead_wire,
                     &mut scratch.lead_exposure,
+                    &mut scratch.exposure,
                 )
                 .is_err()
             {
                 return false;
-            }
-            for (e, x) in scratch.exposure.iter_mut().zip(&scratch.lead_exposure) {
-                *e += x;
             }
         }
         true
@@ -916,6 +869,50 @@ impl Problem {
         self.regularisation_into(controls, out);
         out.iter().all(|r| r.is_finite())
     }
+}
+
+/// `baseline` parameterised by `objective`'s spline settings, and the spline parameter at
+/// each wire segment's middle (where the feed spline is evaluated).
+fn parameterise(
+    baseline: Baseline,
+    objective: &Objective,
+) -> Result<(Trajectory, Vec<f64>), PsoError> {
+    let trajectory = Trajectory::with_ends(
+        baseline,
+        objective.control_points,
+        objective.ends,
+        objective.spacing,
+    )?;
+    let segment_u = trajectory
+        .parameters()
+        .windows(2)
+        .map(|w| 0.5 * (w[0] + w[1]))
+        .collect();
+    Ok((trajectory, segment_u))
+}
+
+/// Adds the heat of the straight lead-in `lead` to `out` (one value per panel of `surface`):
+/// `model` with the causal mask off, since the wire is on the lead-in before it cuts any
+/// panel, so all of it counts for every panel. `wire` and `extra` are reusable buffers.
+pub(crate) fn add_lead_in_exposure(
+    model: &ExposureModel,
+    surface: &Panels,
+    lead: &[Point2<f64>; 2],
+    wire: &mut WireSegments,
+    extra: &mut Vec<f64>,
+    out: &mut [f64],
+) -> Result<(), ExposureError> {
+    wire.set(lead)?;
+    extra.resize(surface.len(), 0.0);
+    ExposureModel {
+        causal: crate::exposure::Causal::Off,
+        ..*model
+    }
+    .exposure_into(surface, wire, extra)?;
+    for (e, x) in out.iter_mut().zip(extra.iter()) {
+        *e += x;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

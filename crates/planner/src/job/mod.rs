@@ -40,7 +40,7 @@ pub use motion::Motion;
 pub use output::{CalibrationRow, ExposureStats, HotwirePlan, JobProgress, SectionPlan};
 pub use picture::{exposure_svg, PanelProfiles};
 pub use process::FALLBACK_OFFSET_MM;
-pub use run::{lead_in_start, plan, plan_observed};
+pub use run::{lead_in_start, plan, plan_observed, surface_points};
 pub use source::{AirfoilSource, EMBEDDED_AIRFOILS};
 pub use spec::{validate, HotwireJob, TipRequest, TipSection, DEFAULT_MACHINE};
 pub use views::{FRAME_ID, SECTION_FRAME_ID, TIP_FRAME_ID};

@@ -7,7 +7,7 @@ use std::time::Instant;
 use nalgebra::{Point2, Vector2};
 
 use crate::airfoil::{Airfoil, SyncedPoints};
-use crate::exposure::{ExposureModel, Panels};
+use crate::exposure::Panels;
 use crate::pso::{self, Objective, Problem, PsoConfig, PsoError};
 use crate::refine;
 use crate::trajectory::{is_feasible, Baseline};
@@ -89,7 +89,7 @@ fn plan_section(
     let mut problem = Problem::new(foil, surface_points, baseline, objective).map_err(wrap)?;
     if job.lead_in_mm > 0.0 {
         problem = problem
-            .with_lead_in(lead_in_start(foil, job.lead_in_mm, s.offset_mm))
+            .with_lead_in(lead_in_start(foil.points(), job.lead_in_mm, s.offset_mm))
             .map_err(wrap)?;
         if let Some(max) = job.lead_in_max_mm.filter(|&m| m > job.lead_in_mm) {
             problem = problem
@@ -231,11 +231,11 @@ fn plan_section(
     Ok((plan, result.iterations_run))
 }
 
-/// Where the lead-in starts: on the chord line, `lead_in_mm` behind the wire's pass round the
-/// trailing edge (the TE's midpoint plus the offset).
-pub fn lead_in_start(foil: &Airfoil, lead_in_mm: f64, offset_mm: f64) -> Point2<f64> {
-    let pts = foil.points();
-    nalgebra::center(&pts[0], &pts[pts.len() - 1]) + Vector2::new(lead_in_mm + offset_mm, 0.0)
+/// Where the lead-in starts for the foil outline `foil` (Selig order, from the trailing edge):
+/// on the chord line, `lead_in_mm` behind the wire's pass round the trailing edge (the TE's
+/// midpoint plus the offset).
+pub fn lead_in_start(foil: &[Point2<f64>], lead_in_mm: f64, offset_mm: f64) -> Point2<f64> {
+    nalgebra::center(&foil[0], &foil[foil.len() - 1]) + Vector2::new(lead_in_mm + offset_mm, 0.0)
 }
 
 /// Closed perimeter of a foil (mm).
@@ -374,11 +374,7 @@ pub fn plan_observed(
     };
 
     // Leads: straight along each chord line, from behind the TE.
-    let behind_te = |s: &SectionPlan| {
-        let foil = &s.foil;
-        nalgebra::center(&foil[0], &foil[foil.len() - 1])
-            + Vector2::new(s.lead_in_mm + s.offset_mm, 0.0)
-    };
+    let behind_te = |s: &SectionPlan| lead_in_start(&s.foil, s.lead_in_mm, s.offset_mm);
     let root_out = behind_te(&root);
     let (tip_section, tip_chord, placement) = match (&tip_plan, &tip) {
         (Some(t), Some((spec, _))) => (t, t.chord_mm, spec.placement),
@@ -425,9 +421,8 @@ pub fn plan_observed(
             .zip(&cut_currents)
             .map(|(rho, g)| rho / (g * g))
             .collect();
-        refresh_exposure(job, &mut root, &root_foil, &root_cut, &dwell)?;
-        let tip_foil = &tip.as_ref().expect("a tip plan has a tip").1;
-        refresh_exposure(job, t, tip_foil, &tip_cut, &dwell)?;
+        refresh_exposure(job, &mut root, &root_cut, &dwell)?;
+        refresh_exposure(job, t, &tip_cut, &dwell)?;
     }
     let last = root_cut.len() - 1;
     let (root_lead_out, tip_lead_out) =
@@ -563,7 +558,6 @@ fn dwell_ratios(
 fn refresh_exposure(
     job: &HotwireJob,
     section: &mut SectionPlan,
-    foil: &Airfoil,
     path: &[Point2<f64>],
     ratios: &[f64],
 ) -> Result<(), JobError> {
@@ -582,25 +576,27 @@ fn refresh_exposure(
         .map_err(wrap)?;
     if job.lead_in_mm > 0.0 {
         // The lead-in's heat reaches every panel (as in `Problem::with_lead_in`).
-        let start = lead_in_start(foil, section.lead_in_mm, section.offset_mm);
-        let lead = crate::exposure::WireSegments::from_points(&[start, path[0]]).map_err(wrap)?;
-        let mut extra = vec![0.0; panels.len()];
-        ExposureModel {
-            causal: crate::exposure::Causal::Off,
-            ..job.objective.model
-        }
-        .exposure_into(&panels, &lead, &mut extra)
+        let start = lead_in_start(&section.foil, section.lead_in_mm, section.offset_mm);
+        crate::problem::add_lead_in_exposure(
+            &job.objective.model,
+            &panels,
+            &[start, path[0]],
+            &mut crate::exposure::WireSegments::default(),
+            &mut Vec::new(),
+            &mut section.optimised_exposure,
+        )
         .map_err(wrap)?;
-        for (e, x) in section.optimised_exposure.iter_mut().zip(&extra) {
-            *e += x;
-        }
     }
     section.optimised_stats = ExposureStats::of(&section.optimised_exposure, section.cse);
     Ok(())
 }
 
-/// How many resampled points give `panels` distinct surface panels on `foil`.
-fn surface_points(foil: &Airfoil, panels: usize) -> Result<usize, JobError> {
+/// How many resampled points give `panels` distinct surface panels on `foil` (a sharp
+/// trailing edge repeats its point at both ends).
+///
+/// # Errors
+/// A foil that cannot be resampled.
+pub fn surface_points(foil: &Airfoil, panels: usize) -> Result<usize, JobError> {
     let probe = foil.resampled_cosine(panels)?;
     let pts = probe.points();
     Ok(if pts.first() == pts.last() {
