@@ -9,7 +9,8 @@
 //!   regenerated.
 //! - `play` runs the replayer library on a node named `bag_play` with a progress bar: recorded
 //!   timing (×`--rate`), recorded QoS, `--loop`, `--topics`/`--exclude`, `--remap`,
-//!   `--start-offset`, `--paused` (resume with `/bag_play/set_paused`); Ctrl-C stops cleanly.
+//!   `--start-offset`, `--paused` (resume with `/bag_play/set_paused`), `--clock [HZ]` (the
+//!   bag's time on `/clock` for `use_sim_time` nodes); Ctrl-C stops cleanly.
 //!
 //! Exit status: 0 done; 64 a bad command line or a path that does not exist; 65 a bag that
 //! cannot be read (truncated, corrupted, unfinished: the message names the file and offset, and
@@ -79,6 +80,10 @@ pub struct PlayArgs {
     /// Keep the publishers up S seconds after the last message (retransmissions, late joiners).
     #[arg(long, default_value_t = 1.0, value_name = "S")]
     pub linger: f64,
+    /// Publish the bag's time on /clock (rosgraph_msgs/msg/Clock) HZ times a second (default
+    /// 40), for nodes started with use_sim_time:=true; frozen while paused.
+    #[arg(long, value_name = "HZ", num_args = 0..=1, default_missing_value = "40")]
+    pub clock: Option<f64>,
     /// DDS interfaces: all, loopback or ADDR[,ADDR…] (default: CELL_DDS_NETWORK, else by
     /// ROS_LOCALHOST_ONLY, else all).
     #[arg(long, value_name = "NETWORK")]
@@ -108,6 +113,7 @@ impl PlayArgs {
             start_paused: self.paused,
             wait_for_subscribers_s: self.wait_for_subscribers,
             linger_s: self.linger,
+            clock_hz: self.clock.unwrap_or(0.0),
             ..defaults
         }
     }

@@ -700,3 +700,136 @@ fn bad_input_is_refused_naming_the_parameter_or_file() {
         "repair",
     );
 }
+
+/// `--clock`: the replay publishes the bag's time on `/clock`, and a node started with
+/// `use_sim_time:=true` stamps what it publishes with that time, not the wall clock.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_clock_carries_the_bag_time_and_sim_time_nodes_stamp_with_it() {
+    cell_runtime::logging::init(Some("info"));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("clock");
+    let mut w = BagWriter::create(&path, Default::default()).unwrap();
+    w.add_topic(
+        "/cell/toolpath",
+        Toolpath::ROS_NAME,
+        &[QosProfile::reliable_transient_local(16)],
+    )
+    .unwrap();
+    w.add_topic(
+        "/chatter",
+        StringMsg::ROS_NAME,
+        &[QosProfile::reliable_volatile(32)],
+    )
+    .unwrap();
+    // A 100 × 70 mm rectangle inside grbl-xy's travel.
+    let p = |x: f64, y: f64| cell_msgs::geometry_msgs::Point { x, y, z: 0.0 };
+    let cut = vec![
+        p(50.0, 50.0),
+        p(150.0, 50.0),
+        p(150.0, 120.0),
+        p(50.0, 120.0),
+        p(50.0, 50.0),
+    ];
+    let toolpath = Toolpath {
+        job_id: "timed".into(),
+        process: Toolpath::PROCESS_HOTWIRE,
+        power_unit: Toolpath::POWER_WIRE_CURRENT_A,
+        segments: vec![cell_msgs::ToolpathSegment {
+            kind: cell_msgs::ToolpathSegment::KIND_CUT,
+            feed_mm_s: vec![8.0; cut.len()],
+            power: vec![2.5; cut.len()],
+            points: cut,
+            ..Default::default()
+        }],
+        ..Toolpath::default()
+    };
+    w.write(
+        "/chatter",
+        &StringMsg {
+            data: "start".into(),
+        },
+        T0_NS,
+    )
+    .unwrap();
+    // The toolpath 1 s into the bag, then 1 s more of bag.
+    w.write("/cell/toolpath", &toolpath, T0_NS + 1_000_000_000)
+        .unwrap();
+    w.write(
+        "/chatter",
+        &StringMsg { data: "end".into() },
+        T0_NS + 2_000_000_000,
+    )
+    .unwrap();
+    w.finish().unwrap();
+
+    let domain = fresh_domain();
+    // An emitter on simulated time, as a bringup with use_sim_time:=true starts it.
+    let mut setup = NodeSetup::local("emitter", domain);
+    setup.fast_path = cell_runtime::FastPathMode::Off;
+    setup.args = cell_runtime::args::NodeArgs::parse([
+        "--ros-args",
+        "-r",
+        "__ns:=/cell",
+        "-p",
+        "use_sim_time:=true",
+    ])
+    .unwrap();
+    let emitter = CellNode::new(setup).unwrap();
+    assert!(emitter.standard_params().use_sim_time);
+    assert_eq!(emitter.now(), Default::default(), "zero before any /clock");
+    tokio::spawn(emitter::run(
+        emitter,
+        EmitterParams {
+            machine_profile: "grbl-xy".into(),
+            ..EmitterParams::default()
+        },
+    ));
+    let listener = node("listener", domain, false);
+    let clocks = inbox::<cell_msgs::rosgraph_msgs::Clock>(&listener, "/clock", QosPreset::Clock);
+    let programs = inbox::<MachineProgram>(&listener, "/cell/machine_program", QosPreset::Plan);
+    let chatter = inbox::<StringMsg>(&listener, "/chatter", QosPreset::Status);
+
+    let (task, _stop) = start_replay(
+        "bag_play",
+        domain,
+        ReplayerParams {
+            clock_hz: 50.0,
+            ..params(&path)
+        },
+    );
+    wait_for_count(&programs, 1).await;
+    let summary = within(task).await.unwrap().unwrap();
+    assert_eq!(summary.published, 3, "{summary}");
+    assert_eq!(texts(&chatter), ["start", "end"]);
+
+    let ns = |t: &cell_msgs::builtin_interfaces::Time| {
+        t.sec as u64 * 1_000_000_000 + u64::from(t.nanosec)
+    };
+    let end_ns = T0_NS + 2_000_000_000;
+    let ticks: Vec<u64> = clocks
+        .lock()
+        .unwrap()
+        .iter()
+        .map(|(_, c)| ns(&c.clock))
+        .collect();
+    // About 2 s at 50 Hz; a loaded machine may deliver fewer.
+    assert!(ticks.len() >= 10, "{} /clock messages", ticks.len());
+    assert!(
+        ticks
+            .iter()
+            .all(|&t| (T0_NS..=end_ns + 100_000_000).contains(&t)),
+        "every /clock within the bag's time: {ticks:?}"
+    );
+    assert!(
+        ticks.windows(2).all(|w| w[0] <= w[1]),
+        "monotonic: {ticks:?}"
+    );
+    // The program was emitted when the bag's clock stood at about 1 s in: that is its stamp,
+    // decades away from the wall clock.
+    let stamp = ns(&programs.lock().unwrap()[0].1.header.stamp);
+    assert!(
+        (T0_NS + 700_000_000..=T0_NS + 1_600_000_000).contains(&stamp),
+        "program stamped {stamp}, the bag's toolpath was at {}",
+        T0_NS + 1_000_000_000
+    );
+}

@@ -17,6 +17,7 @@ pub mod geometry_msgs;
 pub mod idl;
 pub mod json;
 pub mod registry;
+pub mod rosgraph_msgs;
 pub mod std_msgs;
 pub mod std_srvs;
 
@@ -123,6 +124,7 @@ macro_rules! for_each_message {
             $crate::geometry_msgs::Vector3 => "geometry_msgs/msg/Vector3",
             $crate::geometry_msgs::Quaternion => "geometry_msgs/msg/Quaternion",
             $crate::geometry_msgs::Pose => "geometry_msgs/msg/Pose",
+            $crate::rosgraph_msgs::Clock => "rosgraph_msgs/msg/Clock",
             $crate::std_srvs::SetBoolRequest => "std_srvs/srv/SetBool_Request",
             $crate::std_srvs::SetBoolResponse => "std_srvs/srv/SetBool_Response",
             $crate::Toolpath => "cell_msgs/msg/Toolpath",

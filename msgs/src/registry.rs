@@ -74,6 +74,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../std/geometry_msgs/msg/Pose.msg"),
     ),
     (
+        "rosgraph_msgs/msg/Clock",
+        Kind::Msg,
+        include_str!("../std/rosgraph_msgs/msg/Clock.msg"),
+    ),
+    (
         "std_srvs/srv/SetBool",
         Kind::Srv,
         include_str!("../std/std_srvs/srv/SetBool.srv"),

@@ -14,6 +14,7 @@
 
 pub mod action;
 pub mod args;
+pub mod clock;
 pub mod fastpath;
 pub mod goal_server;
 pub mod graph;

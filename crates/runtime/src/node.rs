@@ -7,11 +7,13 @@ use std::{
 };
 
 use anyhow::{anyhow, bail, Context as _};
+use cell_msgs::builtin_interfaces::Time;
 use ros2_client::{dds::rustdds::DomainParticipantBuilder, qos::QosProfile, Context, NodeName};
 use serde::de::DeserializeOwned;
 
 use crate::{
     args::{resolve_topic, NodeArgs},
+    clock::{follow_clock, NodeClock},
     fastpath::FastPath,
     params::ParamSources,
     rerun_sink::{RerunSink, RerunTarget},
@@ -197,6 +199,7 @@ struct NodeInner {
     fast_path: Option<FastPath>,
     rerun: RerunSink,
     shutdown: Shutdown,
+    clock: std::sync::OnceLock<NodeClock>,
 }
 
 /// A running ROS 2 node: DDS participant, names and remappings, parameters, fast path, Rerun
@@ -316,7 +319,7 @@ impl CellNode {
             setup.network,
             if fast_path.is_some() { "on" } else { "off" }
         );
-        Ok(Self {
+        let node = Self {
             inner: Arc::new(NodeInner {
                 name,
                 namespace,
@@ -329,8 +332,23 @@ impl CellNode {
                 fast_path,
                 rerun,
                 shutdown: setup.shutdown,
+                clock: std::sync::OnceLock::new(),
             }),
-        })
+        };
+        let clock = if node.inner.standard.use_sim_time {
+            NodeClock::Simulated(follow_clock(&node).context("following /clock (use_sim_time)")?)
+        } else {
+            NodeClock::System
+        };
+        let _ = node.inner.clock.set(clock);
+        Ok(node)
+    }
+
+    /// The node's current time: the system clock, or with `use_sim_time` the last `/clock`
+    /// message (zero before the first one); see [`crate::clock`]. Stamp what the node publishes
+    /// with this.
+    pub fn now(&self) -> Time {
+        self.inner.clock.get().map_or_else(Time::now, NodeClock::now)
     }
 
     /// `profile` with the node's `qos_overrides` parameters for `topic` (fully qualified) and

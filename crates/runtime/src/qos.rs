@@ -14,6 +14,9 @@ pub enum QosPreset {
     Stream,
     /// Status and events (`MachineStatus`): reliable, volatile, a short history.
     Status,
+    /// The time source on `/clock`: best-effort, volatile, keep-last-1, as rclcpp's
+    /// `ClockQoS` (so it matches `ros2 bag play --clock` and simulators).
+    Clock,
 }
 
 /// How many plans a late joiner can catch up on.
@@ -40,6 +43,10 @@ impl QosPreset {
                 .reliability(reliable)
                 .durability(Durability::Volatile)
                 .history(History::KeepLast { depth: 32 }),
+            QosPreset::Clock => QosProfile::subscription_default()
+                .reliability(Reliability::BestEffort)
+                .durability(Durability::Volatile)
+                .history(History::KeepLast { depth: 1 }),
         }
     }
 }

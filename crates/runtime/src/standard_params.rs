@@ -3,8 +3,8 @@
 //! `qos_overrides./topic.publisher.depth: 5` must not stop a cell node, whose own parameter
 //! structs refuse unknown keys.
 //!
-//! - `use_sim_time` (bool, default false): declared on the graph. True is accepted with a
-//!   warning: cell nodes stamp with the system clock and do not follow `/clock` yet.
+//! - `use_sim_time` (bool, default false): declared on the graph. True makes the node follow
+//!   `/clock` ([`crate::clock`]): [`crate::CellNode::now`] and so every stamp it publishes.
 //! - `qos_overrides.<topic>.<publisher|subscription>.<policy>` (ROS 2's QoS override
 //!   parameters): `reliability` (`reliable` | `best_effort`), `durability` (`volatile` |
 //!   `transient_local`), `history` (`keep_last` | `keep_all`), `depth` (≥ 1),
@@ -77,12 +77,6 @@ impl StandardParams {
                 origin,
                 what: format!("parameter `use_sim_time`: expected true or false, found {value:?}"),
             })?;
-            if out.use_sim_time {
-                tracing::warn!(
-                    "use_sim_time is true: accepted, but this node stamps with the system clock \
-                     (it does not follow /clock yet)"
-                );
-            }
         }
         for key in IGNORED {
             if sources.take(key).is_some() {

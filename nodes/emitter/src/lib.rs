@@ -92,6 +92,7 @@ impl Emitter {
     ) -> Result<MachineProgram, String> {
         let default =
             (profile.is_empty() || profile == self.profile_name).then(|| self.profile.clone());
+        let now = self.node.now();
         tokio::task::spawn_blocking(move || {
             let profile = match default {
                 Some(p) => p,
@@ -99,8 +100,10 @@ impl Emitter {
                     MachineProfile::resolve(&profile).map_err(|e| format!("job {job_id}: {e}"))?,
                 ),
             };
-            cell_emitter::emit_program(&toolpath, &profile, &job_id)
-                .map_err(|e| format!("job {job_id}: {e}"))
+            let mut program = cell_emitter::emit_program(&toolpath, &profile, &job_id)
+                .map_err(|e| format!("job {job_id}: {e}"))?;
+            program.header.stamp = now;
+            Ok(program)
         })
         .await
         .map_err(|e| format!("emitter thread: {e}"))?

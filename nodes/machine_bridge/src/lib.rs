@@ -32,7 +32,7 @@ use std::time::Duration;
 
 use cell_msgs::std_msgs::Header;
 use cell_msgs::{
-    builtin_interfaces::Time, ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult,
+    ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult,
     MachineCommand, MachineProgram, MachineStatus, SendMachineCommandRequest,
     SendMachineCommandResponse,
 };
@@ -271,7 +271,7 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
     loop {
         tokio::select! {
             _ = status_tick.tick() => {
-                let stamp = Time::now();
+                let stamp = node.now();
                 for c in controllers.iter() {
                     let mut s = c.status();
                     s.header = Header { stamp, frame_id: s.machine_id.clone() };
@@ -351,7 +351,7 @@ fn log_statuses_to_rerun(
     logger: &mut MachineStatusLogger,
     frame: i64,
 ) {
-    let stamp = Time::now();
+    let stamp = node.now();
     node.rerun().set_time(&stamp, frame);
     for c in controllers {
         let mut s = c.status();

@@ -453,7 +453,10 @@ impl GoalHandler for Planner {
         let forwarding = async {
             while let Some(update) = rx.recv().await {
                 match update {
-                    Update::Maps(maps) => {
+                    Update::Maps(mut maps) => {
+                        let now = self.node.now();
+                        maps.profile.header.stamp = now;
+                        maps.matrix.header.stamp = now;
                         log_live(&self.node, &maps);
                         self.exposure.publish(maps.profile).await?;
                         self.matrix.publish(maps.matrix).await?;
@@ -475,12 +478,18 @@ impl GoalHandler for Planner {
         forwarded?;
         Ok(match outcome? {
             Ok(plan) => {
-                let toolpath = plan.to_toolpath(&job_id);
-                let profile = plan.exposure_heat_map();
+                let now = self.node.now();
+                let mut toolpath = plan.to_toolpath(&job_id);
+                toolpath.header.stamp = now;
+                let mut profile = plan.exposure_heat_map();
+                profile.header.stamp = now;
                 self.toolpaths.publish(toolpath.clone()).await?;
                 self.exposure.publish(profile.clone()).await?;
                 match plan.exposure_matrix_heat_map() {
-                    Ok(m) => self.matrix.publish(m).await?,
+                    Ok(mut m) => {
+                        m.header.stamp = now;
+                        self.matrix.publish(m).await?
+                    }
                     Err(e) => tracing::warn!("plan_hotwire: {job_id}: exposure matrix: {e}"),
                 }
                 log_to_rerun(&self.node, &plan, &toolpath, &profile);

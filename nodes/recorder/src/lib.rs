@@ -107,7 +107,7 @@ fn bag_qos(preset: QosPreset) -> QosProfile {
         QosPreset::Plan => {
             QosProfile::reliable_transient_local(cell_runtime::qos::PLAN_HISTORY_DEPTH as u32)
         }
-        QosPreset::Stream => QosProfile::best_effort(1),
+        QosPreset::Stream | QosPreset::Clock => QosProfile::best_effort(1),
         QosPreset::Status => QosProfile::reliable_volatile(32),
     }
 }

@@ -15,6 +15,11 @@
 //! - **Selection**: `topics`/`exclude` regexes (whole-name, as the recorder's) and `remap`
 //!   (`from:=to`) pick and rename topics.
 //!
+//! - **Clock**: with `clock_hz` > 0 (`cell bag play --clock [HZ]`) the node is a ROS time
+//!   source, as `ros2 bag play --clock`: it publishes the bag's time (the recorded log time
+//!   of the replay position, frozen while paused) as `rosgraph_msgs/msg/Clock` on `/clock`
+//!   that many times a second while it plays, for nodes with `use_sim_time` true.
+//!
 //! A reader thread reads, filters and decodes ahead of the clock (within a memory budget), so
 //! decompressing a chunk does not hold up a message that is due.
 
@@ -35,6 +40,8 @@ use std::time::Duration;
 use anyhow::anyhow;
 use cell_bag::qos::{Durability, Reliability};
 use cell_bag::BagReader;
+use cell_msgs::builtin_interfaces::Time;
+use cell_msgs::rosgraph_msgs::Clock;
 use cell_msgs::std_srvs::{SetBoolRequest, SetBoolResponse};
 use cell_msgs::{CdrError, RosMessage};
 use cell_runtime::{CellNode, DataError, NodeParamError, Publisher, QosPreset, Shutdown};
@@ -71,6 +78,8 @@ pub struct ReplayerParams {
     pub linger_s: f64,
     /// Log progress at most this often (s).
     pub progress_every_s: f64,
+    /// Publish the bag's time on `/clock` this many times a second (0: not at all).
+    pub clock_hz: f64,
 }
 
 impl Default for ReplayerParams {
@@ -87,6 +96,7 @@ impl Default for ReplayerParams {
             wait_for_subscribers_s: 1.0,
             linger_s: 1.0,
             progress_every_s: 5.0,
+            clock_hz: 0.0,
         }
     }
 }
@@ -280,6 +290,7 @@ pub struct Replay {
     start_paused: bool,
     wait_for_subscribers: Duration,
     linger: Duration,
+    clock_period: Option<Duration>,
 }
 
 /// A non-negative, finite number of seconds.
@@ -325,6 +336,18 @@ impl Replay {
             ))
             .into());
         }
+        let clock_period = match p.clock_hz {
+            0.0 => None,
+            hz if hz.is_finite() && hz > 0.0 && hz <= MAX_CLOCK_HZ => {
+                Some(Duration::from_secs_f64(1.0 / hz))
+            }
+            hz => {
+                return Err(NodeParamError(format!(
+                    "clock_hz: {hz}: expected 0 (off) or a rate in (0, {MAX_CLOCK_HZ}] Hz"
+                ))
+                .into())
+            }
+        };
         let filter = TopicFilter::new(&p.topics, &p.exclude)?;
         let remaps = Remaps::parse(&p.remap)?;
         let reader = BagReader::open(&path).map_err(|e| DataError(format!("bag: {e}")))?;
@@ -394,6 +417,7 @@ impl Replay {
             start_paused: p.start_paused,
             wait_for_subscribers,
             linger,
+            clock_period,
         })
     }
 
@@ -435,6 +459,7 @@ impl Replay {
             start_paused,
             wait_for_subscribers,
             linger,
+            clock_period,
         } = self;
         let total_messages: u64 = plans.iter().filter(|p| p.known).map(|p| p.messages).sum();
         let unknown_type: u64 = plans.iter().filter(|p| !p.known).map(|p| p.messages).sum();
@@ -464,6 +489,14 @@ impl Replay {
             route.push(Some(index));
         }
         let topics = publishers.len();
+        let mut time_source = match clock_period {
+            Some(period) => Some(TimeSource::new(
+                node,
+                period,
+                bag_start_ns.saturating_add(start_offset.as_nanos() as u64),
+            )?),
+            None => None,
+        };
 
         // Pause/resume arrive from the service as requests the loop below answers, so the
         // answer comes after the clock has changed.
@@ -595,6 +628,9 @@ impl Replay {
                         apply(&mut clock, c, now());
                         show_clock(&clock, now(), &mut progress, &mut observer);
                     }
+                    () = TimeSource::tick(&mut time_source) => {
+                        TimeSource::publish(&mut time_source, clock.position(now())).await;
+                    }
                     feed = feed_rx.recv() => match feed {
                         None => break 'replay,
                         Some(Feed::Failed(e)) => {
@@ -605,6 +641,9 @@ impl Replay {
                     },
                 }
             };
+            if let Some(source) = &mut time_source {
+                source.place(&item);
+            }
             if item.pass != progress.pass {
                 // A new pass: its messages are those left after the start offset.
                 progress.pass = item.pass;
@@ -634,6 +673,9 @@ impl Replay {
                     Some(c) = control_rx.recv() => {
                         apply(&mut clock, c, now());
                         show_clock(&clock, now(), &mut progress, &mut observer);
+                    }
+                    () = TimeSource::tick(&mut time_source) => {
+                        TimeSource::publish(&mut time_source, clock.position(now())).await;
                     }
                     _ = wait => break due.unwrap_or_default(),
                 }
@@ -689,6 +731,64 @@ impl Replay {
             stopped,
             rate,
         })
+    }
+}
+
+/// The fastest `/clock` a replay publishes (rosbag2 sets no limit; beyond this the ticks would
+/// crowd out the messages).
+const MAX_CLOCK_HZ: f64 = 1000.0;
+
+/// The replay as a ROS time source: the bag's time on `/clock` (module docs).
+struct TimeSource {
+    publisher: Publisher<Clock>,
+    ticks: tokio::time::Interval,
+    /// The log time at bag offset 0 of the current pass (the first message kept; before it,
+    /// the bag's start plus the start offset).
+    origin_ns: u64,
+    pass: u32,
+}
+
+impl TimeSource {
+    fn new(node: &CellNode, period: Duration, origin_ns: u64) -> anyhow::Result<Self> {
+        let mut ticks = tokio::time::interval(period);
+        ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        Ok(TimeSource {
+            publisher: Publisher::new(node, cell_runtime::clock::CLOCK_TOPIC, QosPreset::Clock)?,
+            ticks,
+            origin_ns,
+            pass: 0,
+        })
+    }
+
+    /// Takes the origin of a new pass from its first message.
+    fn place(&mut self, item: &Item) {
+        if item.pass != self.pass {
+            self.pass = item.pass;
+            let offset_ns = u64::try_from(item.offset.as_nanos()).unwrap_or(u64::MAX);
+            self.origin_ns = item.log_time_ns.saturating_sub(offset_ns);
+        }
+    }
+
+    /// The next tick; never, without a time source.
+    async fn tick(source: &mut Option<Self>) {
+        match source {
+            Some(s) => {
+                s.ticks.tick().await;
+            }
+            None => std::future::pending().await,
+        }
+    }
+
+    /// Publishes the bag time at replay `position`.
+    async fn publish(source: &mut Option<Self>, position: Duration) {
+        let Some(s) = source else { return };
+        let ns = s
+            .origin_ns
+            .saturating_add(u64::try_from(position.as_nanos()).unwrap_or(u64::MAX));
+        let clock = Time::from_system_time(std::time::UNIX_EPOCH + Duration::from_nanos(ns));
+        if let Err(e) = s.publisher.publish(Clock { clock }).await {
+            tracing::debug!("/clock: {e:#}");
+        }
     }
 }
 
@@ -808,6 +908,7 @@ cell_msgs::for_each_message!(known_types);
 struct Item {
     pass: u32,
     offset: Duration,
+    log_time_ns: u64,
     topic: usize,
     message: Box<dyn Any + Send>,
     _budget: Permit,
@@ -877,6 +978,7 @@ impl ReadJob {
                 let item = Item {
                     pass,
                     offset,
+                    log_time_ns: m.log_time_ns,
                     topic,
                     message,
                     _budget: self.budget.acquire(m.data.len()),

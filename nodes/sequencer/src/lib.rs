@@ -372,7 +372,8 @@ impl GoalHandler for Sequencer {
                             best_overheats: pr.best_overheats as u32,
                         });
                     }
-                    Update::Frame(step, hm) => {
+                    Update::Frame(step, mut hm) => {
+                        hm.header.stamp = self.node.now();
                         if let Some(rec) = self.node.rerun().stream() {
                             rec.set_time_sequence("sim_step", step as i64);
                             self.node.rerun().log_heat_map("/sheet/heat", &hm);
@@ -391,8 +392,9 @@ impl GoalHandler for Sequencer {
             Ok(out) => out,
             Err(e) => return Ok(failed(&job_id, e.to_string())),
         };
-        let toolpath = to_toolpath(&out.problem, &out.plan, &job_id, &opt);
-        let plan = with_cut(
+        let mut toolpath = to_toolpath(&out.problem, &out.plan, &job_id, &opt);
+        toolpath.header.stamp = self.node.now();
+        let mut plan = with_cut(
             to_cut_plan_msg(
                 &out.problem,
                 &out.plan,
@@ -403,6 +405,7 @@ impl GoalHandler for Sequencer {
             ),
             out.cut.as_ref(),
         );
+        plan.header.stamp = toolpath.header.stamp;
         let canceled = ctx.is_canceled();
         if !canceled {
             self.toolpaths.publish(toolpath.clone()).await?;

@@ -435,7 +435,7 @@ async fn serve_mesh(
         job_id,
         FRAME_ID,
     );
-    toolpath.header.stamp = cell_msgs::builtin_interfaces::Time::now();
+    toolpath.header.stamp = node.now();
     let stack = layer_stack_msg(&out.stack, job_id, FRAME_ID);
     for w in &out.report.warnings {
         tracing::warn!("slice: {job_id}: {w}");
@@ -498,7 +498,7 @@ async fn serve_wing(
         }
     }
     let mut toolpath = out.toolpath.clone();
-    let now = cell_msgs::builtin_interfaces::Time::now();
+    let now = node.now();
     toolpath.header.stamp = now;
     let mut stack = out.stack.clone();
     stack.header.stamp = now;
