@@ -48,6 +48,16 @@ impl Time {
     }
 }
 
+/// A period between two time points (`builtin_interfaces/msg/Duration`), e.g. a marker's
+/// lifetime (0: forever).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Duration {
+    /// The seconds component, valid over all int32 values.
+    pub sec: i32,
+    /// The nanoseconds component, in `[0, 1e9)`, added to the seconds component.
+    pub nanosec: u32,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,6 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::std_msgs::Header;
+
 /// The position of a point in free space.
 #[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
 pub struct Point {
@@ -56,4 +58,34 @@ pub struct Pose {
     pub position: Point,
     /// Orientation.
     pub orientation: Quaternion,
+}
+
+/// A pose with a reference frame and timestamp (`geometry_msgs/msg/PoseStamped`).
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct PoseStamped {
+    /// Frame and time of the pose.
+    pub header: Header,
+    /// The pose in `header.frame_id`.
+    pub pose: Pose,
+}
+
+/// The transform between two coordinate frames (`geometry_msgs/msg/Transform`).
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
+pub struct Transform {
+    /// Translation of the child frame's origin in the parent frame.
+    pub translation: Vector3,
+    /// Rotation of the child frame relative to the parent frame.
+    pub rotation: Quaternion,
+}
+
+/// A transform from `header.frame_id` to `child_frame_id` at `header.stamp`
+/// (`geometry_msgs/msg/TransformStamped`), as tf2 carries it.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct TransformStamped {
+    /// Parent frame and time.
+    pub header: Header,
+    /// The frame the transform points to.
+    pub child_frame_id: String,
+    /// Pose of `child_frame_id` in `header.frame_id`.
+    pub transform: Transform,
 }

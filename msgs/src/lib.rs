@@ -2,9 +2,11 @@
 //!
 //! The `.msg`/`.srv`/`.action` files under `msgs/` are the single source of truth. This crate embeds
 //! them ([`registry`]), parses them ([`idl`]), provides matching serde types (this module and
-//! [`builtin_interfaces`], [`std_msgs`], [`std_srvs`], [`geometry_msgs`]), writes and reads ROS 2 CDR
-//! ([`to_cdr`], [`from_cdr`]) and decodes CDR from the definitions alone ([`dynamic`]). The
-//! drift test (`tests/drift.rs`) checks every Rust type against its definition.
+//! [`builtin_interfaces`], [`std_msgs`], [`std_srvs`], [`geometry_msgs`], and the standard types
+//! of the RViz/Foxglove views in [`nav_msgs`], [`visualization_msgs`], [`sensor_msgs`],
+//! [`tf2_msgs`], [`diagnostic_msgs`]), writes and reads ROS 2 CDR ([`to_cdr`], [`from_cdr`]) and
+//! decodes CDR from the definitions alone ([`dynamic`]). The drift test (`tests/drift.rs`) checks
+//! every Rust type against its definition.
 //!
 //! Service and action parts are plain messages named like rosidl does:
 //! `cell_msgs/srv/EmitProgram_Request` is [`EmitProgramRequest`] and
@@ -12,14 +14,19 @@
 
 pub mod builtin_interfaces;
 pub mod cdr;
+pub mod diagnostic_msgs;
 pub mod dynamic;
 pub mod geometry_msgs;
 pub mod idl;
 pub mod json;
+pub mod nav_msgs;
 pub mod registry;
 pub mod rosgraph_msgs;
+pub mod sensor_msgs;
 pub mod std_msgs;
 pub mod std_srvs;
+pub mod tf2_msgs;
+pub mod visualization_msgs;
 
 mod action;
 mod msg;
@@ -125,6 +132,23 @@ macro_rules! for_each_message {
             $crate::geometry_msgs::Quaternion => "geometry_msgs/msg/Quaternion",
             $crate::geometry_msgs::Pose => "geometry_msgs/msg/Pose",
             $crate::rosgraph_msgs::Clock => "rosgraph_msgs/msg/Clock",
+            $crate::builtin_interfaces::Duration => "builtin_interfaces/msg/Duration",
+            $crate::std_msgs::ColorRGBA => "std_msgs/msg/ColorRGBA",
+            $crate::geometry_msgs::PoseStamped => "geometry_msgs/msg/PoseStamped",
+            $crate::geometry_msgs::Transform => "geometry_msgs/msg/Transform",
+            $crate::geometry_msgs::TransformStamped => "geometry_msgs/msg/TransformStamped",
+            $crate::nav_msgs::Path => "nav_msgs/msg/Path",
+            $crate::visualization_msgs::Marker => "visualization_msgs/msg/Marker",
+            $crate::visualization_msgs::MarkerArray => "visualization_msgs/msg/MarkerArray",
+            $crate::visualization_msgs::UVCoordinate => "visualization_msgs/msg/UVCoordinate",
+            $crate::visualization_msgs::MeshFile => "visualization_msgs/msg/MeshFile",
+            $crate::sensor_msgs::Image => "sensor_msgs/msg/Image",
+            $crate::sensor_msgs::CompressedImage => "sensor_msgs/msg/CompressedImage",
+            $crate::sensor_msgs::JointState => "sensor_msgs/msg/JointState",
+            $crate::tf2_msgs::TFMessage => "tf2_msgs/msg/TFMessage",
+            $crate::diagnostic_msgs::DiagnosticArray => "diagnostic_msgs/msg/DiagnosticArray",
+            $crate::diagnostic_msgs::DiagnosticStatus => "diagnostic_msgs/msg/DiagnosticStatus",
+            $crate::diagnostic_msgs::KeyValue => "diagnostic_msgs/msg/KeyValue",
             $crate::std_srvs::SetBoolRequest => "std_srvs/srv/SetBool_Request",
             $crate::std_srvs::SetBoolResponse => "std_srvs/srv/SetBool_Response",
             $crate::Toolpath => "cell_msgs/msg/Toolpath",

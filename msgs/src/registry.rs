@@ -83,6 +83,92 @@ const FILES: &[(&str, Kind, &str)] = &[
         Kind::Srv,
         include_str!("../std/std_srvs/srv/SetBool.srv"),
     ),
+    // Standard types of the RViz/Foxglove views (cell_views), copied from the Jazzy packages.
+    (
+        "builtin_interfaces/msg/Duration",
+        Kind::Msg,
+        include_str!("../std/builtin_interfaces/msg/Duration.msg"),
+    ),
+    (
+        "std_msgs/msg/ColorRGBA",
+        Kind::Msg,
+        include_str!("../std/std_msgs/msg/ColorRGBA.msg"),
+    ),
+    (
+        "geometry_msgs/msg/PoseStamped",
+        Kind::Msg,
+        include_str!("../std/geometry_msgs/msg/PoseStamped.msg"),
+    ),
+    (
+        "geometry_msgs/msg/Transform",
+        Kind::Msg,
+        include_str!("../std/geometry_msgs/msg/Transform.msg"),
+    ),
+    (
+        "geometry_msgs/msg/TransformStamped",
+        Kind::Msg,
+        include_str!("../std/geometry_msgs/msg/TransformStamped.msg"),
+    ),
+    (
+        "nav_msgs/msg/Path",
+        Kind::Msg,
+        include_str!("../std/nav_msgs/msg/Path.msg"),
+    ),
+    (
+        "visualization_msgs/msg/Marker",
+        Kind::Msg,
+        include_str!("../std/visualization_msgs/msg/Marker.msg"),
+    ),
+    (
+        "visualization_msgs/msg/MarkerArray",
+        Kind::Msg,
+        include_str!("../std/visualization_msgs/msg/MarkerArray.msg"),
+    ),
+    (
+        "visualization_msgs/msg/UVCoordinate",
+        Kind::Msg,
+        include_str!("../std/visualization_msgs/msg/UVCoordinate.msg"),
+    ),
+    (
+        "visualization_msgs/msg/MeshFile",
+        Kind::Msg,
+        include_str!("../std/visualization_msgs/msg/MeshFile.msg"),
+    ),
+    (
+        "sensor_msgs/msg/Image",
+        Kind::Msg,
+        include_str!("../std/sensor_msgs/msg/Image.msg"),
+    ),
+    (
+        "sensor_msgs/msg/CompressedImage",
+        Kind::Msg,
+        include_str!("../std/sensor_msgs/msg/CompressedImage.msg"),
+    ),
+    (
+        "sensor_msgs/msg/JointState",
+        Kind::Msg,
+        include_str!("../std/sensor_msgs/msg/JointState.msg"),
+    ),
+    (
+        "tf2_msgs/msg/TFMessage",
+        Kind::Msg,
+        include_str!("../std/tf2_msgs/msg/TFMessage.msg"),
+    ),
+    (
+        "diagnostic_msgs/msg/DiagnosticArray",
+        Kind::Msg,
+        include_str!("../std/diagnostic_msgs/msg/DiagnosticArray.msg"),
+    ),
+    (
+        "diagnostic_msgs/msg/DiagnosticStatus",
+        Kind::Msg,
+        include_str!("../std/diagnostic_msgs/msg/DiagnosticStatus.msg"),
+    ),
+    (
+        "diagnostic_msgs/msg/KeyValue",
+        Kind::Msg,
+        include_str!("../std/diagnostic_msgs/msg/KeyValue.msg"),
+    ),
     (
         "cell_msgs/msg/Toolpath",
         Kind::Msg,
@@ -263,7 +349,8 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        assert_eq!(names.len(), 18 + 3 * 2 + 4 * 3);
+        // Messages: cell 11, std 7, rosgraph_msgs 1, the views' standard types 17.
+        assert_eq!(names.len(), 11 + 7 + 1 + 17 + 3 * 2 + 4 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));

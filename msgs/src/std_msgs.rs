@@ -21,3 +21,16 @@ pub struct StringMsg {
     /// The text.
     pub data: String,
 }
+
+/// A colour in RGBA (`std_msgs/msg/ColorRGBA`), each component in `[0, 1]`.
+#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Default)]
+pub struct ColorRGBA {
+    /// Red.
+    pub r: f32,
+    /// Green.
+    pub g: f32,
+    /// Blue.
+    pub b: f32,
+    /// Alpha (opacity).
+    pub a: f32,
+}

@@ -9,6 +9,7 @@
 //! - [`qos`]: QoS presets for plans, streams and status;
 //! - [`pubsub`]: typed publish/subscribe, DDS plus the iceoryx2 [`fastpath`] for large messages;
 //! - [`rerun_sink`]: the shared Rerun sink and its entity-path conventions;
+//! - [`views`]: the standard-type views for RViz and Foxglove ([`cell_views`]);
 //! - [`logging`], [`shutdown`]: `tracing` set-up and clean SIGINT/SIGTERM handling;
 //! - [`run_node`]: the `main` of every node binary.
 
@@ -28,6 +29,7 @@ pub mod rosout;
 pub mod service;
 pub mod shutdown;
 pub mod standard_params;
+pub mod views;
 
 use std::{future::Future, process::ExitCode};
 

@@ -348,7 +348,10 @@ impl CellNode {
     /// message (zero before the first one); see [`crate::clock`]. Stamp what the node publishes
     /// with this.
     pub fn now(&self) -> Time {
-        self.inner.clock.get().map_or_else(Time::now, NodeClock::now)
+        self.inner
+            .clock
+            .get()
+            .map_or_else(Time::now, NodeClock::now)
     }
 
     /// `profile` with the node's `qos_overrides` parameters for `topic` (fully qualified) and

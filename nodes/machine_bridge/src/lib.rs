@@ -32,12 +32,12 @@ use std::time::Duration;
 
 use cell_msgs::std_msgs::Header;
 use cell_msgs::{
-    ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult,
-    MachineCommand, MachineProgram, MachineStatus, SendMachineCommandRequest,
-    SendMachineCommandResponse,
+    ExecuteProgramFeedback, ExecuteProgramGoal, ExecuteProgramResult, MachineCommand,
+    MachineProgram, MachineStatus, SendMachineCommandRequest, SendMachineCommandResponse,
 };
 use cell_runtime::action::GoalEndStatus;
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::views::MachineViews;
 use cell_runtime::{CellNode, MachineStatusLogger, NodeParamError, QosPreset};
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc;
@@ -77,6 +77,11 @@ pub struct BridgeParams {
     /// (abort, safe stop, heat read back) before it exits (s), 0.5..30. Keep it under the
     /// launcher's kill timeout (`cell launch`: 5 s; `ros2 launch`: `sigterm_timeout`, 5 s).
     pub shutdown_budget_s: f64,
+    /// Also publish the standard-type views for RViz and Foxglove (default true): each
+    /// machine's axes on `joint_states` (`sensor_msgs/JointState`, m and rad), its tool frame
+    /// `<machine_id>/tool` on `/tf`, and the machines' health on `/diagnostics` (1 Hz); see
+    /// `cell_runtime::views`.
+    pub standard_views: bool,
 }
 
 impl Default for BridgeParams {
@@ -91,6 +96,7 @@ impl Default for BridgeParams {
             feedback_period_s: 0.1,
             result_timeout_s: 600.0,
             shutdown_budget_s: 4.0,
+            standard_views: true,
         }
     }
 }
@@ -225,6 +231,7 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
     }
     let controllers = Arc::new(controllers);
     let status_pub = node.publisher::<MachineStatus>(&p.status_topic, QosPreset::Status)?;
+    let views = MachineViews::new(&node, p.standard_views)?;
     let mut commands = node.subscriber::<MachineCommand>(&p.command_topic, QosPreset::Status)?;
     let command_server = node
         .service_server::<SendMachineCommandRequest, SendMachineCommandResponse>(COMMAND_SERVICE)?;
@@ -272,15 +279,18 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
         tokio::select! {
             _ = status_tick.tick() => {
                 let stamp = node.now();
+                let mut statuses = Vec::with_capacity(controllers.len());
                 for c in controllers.iter() {
                     let mut s = c.status();
                     s.header = Header { stamp, frame_id: s.machine_id.clone() };
                     node.rerun().set_time(&stamp, frame);
                     rerun_logger.log(node.rerun(), &s);
-                    if let Err(e) = status_pub.publish(s).await {
+                    if let Err(e) = status_pub.publish(s.clone()).await {
                         tracing::warn!("{}: {e:#}", status_pub.topic());
                     }
+                    statuses.push(s);
                 }
+                views.publish(&statuses).await;
                 frame += 1;
             }
             received = commands.recv() => {

@@ -17,6 +17,7 @@ use std::{ops::ControlFlow, time::Duration};
 
 use cell_msgs::{HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath};
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::views::{HeatMapView, ToolpathViews};
 use cell_runtime::{CellNode, Publisher, QosPreset};
 use serde::{Deserialize, Serialize};
 
@@ -76,6 +77,11 @@ pub struct PlannerParams {
     pub exposure_period_s: f64,
     /// How long to wait for a client to ask for a goal's result (s).
     pub result_timeout_s: f64,
+    /// Also publish the standard-type views for RViz and Foxglove (default true): the
+    /// toolpath on `toolpath/path` (`nav_msgs/Path`) and `toolpath/markers`
+    /// (`visualization_msgs/MarkerArray`), the heat maps on `exposure/image` and
+    /// `exposure_matrix/image` (`sensor_msgs/Image`, `32FC1`); see `cell_runtime::views`.
+    pub standard_views: bool,
 }
 
 impl Default for PlannerParams {
@@ -101,6 +107,7 @@ impl Default for PlannerParams {
             feedback_every: 50,
             exposure_period_s: 1.0,
             result_timeout_s: 600.0,
+            standard_views: true,
         }
     }
 }
@@ -388,6 +395,9 @@ struct Planner {
     toolpaths: Publisher<Toolpath>,
     exposure: Publisher<HeatMap>,
     matrix: Publisher<HeatMap>,
+    toolpath_views: ToolpathViews,
+    exposure_image: HeatMapView,
+    matrix_image: HeatMapView,
 }
 
 impl GoalHandler for Planner {
@@ -458,6 +468,8 @@ impl GoalHandler for Planner {
                         maps.profile.header.stamp = now;
                         maps.matrix.header.stamp = now;
                         log_live(&self.node, &maps);
+                        self.exposure_image.publish(&maps.profile).await;
+                        self.matrix_image.publish(&maps.matrix).await;
                         self.exposure.publish(maps.profile).await?;
                         self.matrix.publish(maps.matrix).await?;
                     }
@@ -484,10 +496,13 @@ impl GoalHandler for Planner {
                 let mut profile = plan.exposure_heat_map();
                 profile.header.stamp = now;
                 self.toolpaths.publish(toolpath.clone()).await?;
+                self.toolpath_views.publish(&toolpath).await;
                 self.exposure.publish(profile.clone()).await?;
+                self.exposure_image.publish(&profile).await;
                 match plan.exposure_matrix_heat_map() {
                     Ok(mut m) => {
                         m.header.stamp = now;
+                        self.matrix_image.publish(&m).await;
                         self.matrix.publish(m).await?
                     }
                     Err(e) => tracing::warn!("plan_hotwire: {job_id}: exposure matrix: {e}"),
@@ -528,10 +543,16 @@ impl GoalHandler for Planner {
 
 /// Serves `plan_hotwire` until shutdown.
 pub async fn run(node: CellNode, p: PlannerParams) -> anyhow::Result<()> {
+    let toolpaths = node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?;
+    let exposure = node.publisher::<HeatMap>("exposure", QosPreset::Stream)?;
+    let matrix = node.publisher::<HeatMap>("exposure_matrix", QosPreset::Stream)?;
     let planner = Planner {
-        toolpaths: node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?,
-        exposure: node.publisher::<HeatMap>("exposure", QosPreset::Stream)?,
-        matrix: node.publisher::<HeatMap>("exposure_matrix", QosPreset::Stream)?,
+        toolpath_views: ToolpathViews::new(&node, &toolpaths, p.standard_views)?,
+        exposure_image: HeatMapView::new(&node, &exposure, p.standard_views)?,
+        matrix_image: HeatMapView::new(&node, &matrix, p.standard_views)?,
+        toolpaths,
+        exposure,
+        matrix,
         node: node.clone(),
         p: p.clone(),
     };

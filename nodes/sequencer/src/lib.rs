@@ -31,6 +31,7 @@ use cell_msgs::{
 };
 use cell_profiles::MachineProfile;
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::views::{HeatMapView, ToolpathViews};
 use cell_runtime::{CellNode, Publisher, QosPreset};
 use serde::{Deserialize, Serialize};
 
@@ -95,6 +96,11 @@ pub struct SequencerParams {
     pub cost: CostParams,
     /// How long a finished goal's result waits for the client to ask for it, s.
     pub result_timeout_s: f64,
+    /// Also publish the standard-type views for RViz and Foxglove (default true): the
+    /// toolpath on `toolpath/path` (`nav_msgs/Path`) and `toolpath/markers`
+    /// (`visualization_msgs/MarkerArray`), the heat frames on `sheet_heat/image`
+    /// (`sensor_msgs/Image`, `32FC1`); see `cell_runtime::views`.
+    pub standard_views: bool,
 }
 
 impl Default for SequencerParams {
@@ -120,6 +126,7 @@ impl Default for SequencerParams {
             thermal: ThermalParams::default(),
             cost: CostParams::default(),
             result_timeout_s: 600.0,
+            standard_views: true,
         }
     }
 }
@@ -289,6 +296,8 @@ struct Sequencer {
     toolpaths: Publisher<Toolpath>,
     plans: Publisher<CutPlanMsg>,
     heat: Publisher<HeatMap>,
+    toolpath_views: ToolpathViews,
+    heat_image: HeatMapView,
 }
 
 impl GoalHandler for Sequencer {
@@ -379,6 +388,7 @@ impl GoalHandler for Sequencer {
                             self.node.rerun().log_heat_map("/sheet/heat", &hm);
                             rec.disable_timeline("sim_step");
                         }
+                        self.heat_image.publish(&hm).await;
                         // A lost frame is not worth the goal (or the node).
                         if let Err(e) = self.heat.publish(*hm).await {
                             tracing::warn!("sequence_sheet: heat frame {step}: {e:#}");
@@ -409,6 +419,7 @@ impl GoalHandler for Sequencer {
         let canceled = ctx.is_canceled();
         if !canceled {
             self.toolpaths.publish(toolpath.clone()).await?;
+            self.toolpath_views.publish(&toolpath).await;
             self.plans.publish(plan.clone()).await?;
         }
         let message = format!(
@@ -478,10 +489,14 @@ fn log_best_cost(node: &CellNode, pr: &JobProgress) {
 
 /// Serves `sequence_sheet` until shutdown.
 pub async fn run(node: CellNode, p: SequencerParams) -> anyhow::Result<()> {
+    let toolpaths = node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?;
+    let heat = node.publisher::<HeatMap>("sheet_heat", QosPreset::Stream)?;
     let sequencer = Sequencer {
-        toolpaths: node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?,
+        toolpath_views: ToolpathViews::new(&node, &toolpaths, p.standard_views)?,
+        heat_image: HeatMapView::new(&node, &heat, p.standard_views)?,
+        toolpaths,
         plans: node.publisher::<CutPlanMsg>("cut_plan", QosPreset::Plan)?,
-        heat: node.publisher::<HeatMap>("sheet_heat", QosPreset::Stream)?,
+        heat,
         node: node.clone(),
         p: p.clone(),
     };

@@ -33,6 +33,7 @@
 use cell_msgs::{LayerStack, SliceFeedback, SliceGoal, SliceResult, Toolpath};
 use cell_profiles::MachineProfile;
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::views::ToolpathViews;
 use cell_runtime::{CellNode, Publisher, QosPreset};
 use cell_waam::{LayerToolpath, SegmentKind};
 use serde::{Deserialize, Serialize};
@@ -64,6 +65,10 @@ pub struct SlicerParams {
     /// Machine profile of wing goals (seed 002) whose `machine_profile` is empty: every point
     /// of the section must lie within its travel.
     pub wing_machine_profile: String,
+    /// Also publish the standard-type views for RViz and Foxglove (default true): the
+    /// toolpath on `toolpath/path` (`nav_msgs/Path`) and `toolpath/markers`
+    /// (`visualization_msgs/MarkerArray`, one marker per layer); see `cell_runtime::views`.
+    pub standard_views: bool,
 }
 
 impl Default for SlicerParams {
@@ -75,6 +80,7 @@ impl Default for SlicerParams {
             log_stock_mesh: true,
             result_timeout_s: 600.0,
             wing_machine_profile: "marlin-extruder".into(),
+            standard_views: true,
         }
     }
 }
@@ -298,6 +304,7 @@ struct Slicer {
     p: SlicerParams,
     toolpaths: Publisher<Toolpath>,
     stacks: Publisher<LayerStack>,
+    toolpath_views: ToolpathViews,
 }
 
 /// A finished goal: what to publish and answer, or why there is nothing.
@@ -360,6 +367,7 @@ impl GoalHandler for Slicer {
         };
         Ok(match done {
             Ok((toolpath, stack, result)) => {
+                self.toolpath_views.publish(&toolpath).await;
                 self.toolpaths.publish(toolpath).await?;
                 self.stacks.publish(stack).await?;
                 GoalEnd::succeeded(result)
@@ -380,8 +388,10 @@ impl GoalHandler for Slicer {
 
 /// Serves `slice` until shutdown.
 pub async fn run(node: CellNode, p: SlicerParams) -> anyhow::Result<()> {
+    let toolpaths = node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?;
     let slicer = Slicer {
-        toolpaths: node.publisher::<Toolpath>("toolpath", QosPreset::Plan)?,
+        toolpath_views: ToolpathViews::new(&node, &toolpaths, p.standard_views)?,
+        toolpaths,
         stacks: node.publisher::<LayerStack>("layer_stack", QosPreset::Plan)?,
         node: node.clone(),
         p: p.clone(),
