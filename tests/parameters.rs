@@ -4,6 +4,7 @@
 mod common;
 
 use cell_runtime::{args::NodeArgs, CellNode, NodeSetup};
+use cell_msgs::{builtin_interfaces::Time, rosgraph_msgs::Clock};
 use common::{fresh_domain, DELIVERY_TIMEOUT};
 use monitor::MonitorParams;
 use ros2_client::{
@@ -174,4 +175,41 @@ async fn effective_parameters_are_listed_and_readable_remotely() {
         "{}",
         answer.results[0].reason
     );
+
+    // use_sim_time may be switched at run time, as in rclcpp: the node then follows /clock.
+    let before = node.now();
+    assert!(before.sec > 1_700_000_000, "the wall clock: {before:?}");
+    let switch = ros2_client::Parameter {
+        name: "use_sim_time".into(),
+        value: ros2_client::ParameterValue::Boolean(true),
+    };
+    let answer = tokio::time::timeout(
+        DELIVERY_TIMEOUT,
+        set.async_call_service(SetParametersRequest {
+            parameter: vec![switch.into()],
+        }),
+    )
+    .await
+    .expect("in time")
+    .expect("set_parameters");
+    assert!(answer.results[0].successful, "{}", answer.results[0].reason);
+    assert_eq!(node.now(), Time::default(), "zero before the first /clock");
+    let mut source = NodeSetup::local("time_source", domain);
+    source.fast_path = cell_runtime::FastPathMode::Off;
+    let source = CellNode::new(source).unwrap();
+    let clock = source
+        .publisher::<Clock>("/clock", cell_runtime::QosPreset::Clock)
+        .unwrap();
+    let tick = Time {
+        sec: 1_000,
+        nanosec: 500,
+    };
+    tokio::time::timeout(DELIVERY_TIMEOUT, async {
+        while node.now() != tick {
+            clock.publish(Clock { clock: tick }).await.unwrap();
+            tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+        }
+    })
+    .await
+    .expect("the node follows /clock after use_sim_time was set");
 }

@@ -4,7 +4,8 @@
 //! `rosgraph_msgs/msg/Clock` heard on `/clock` (from `cell bag play --clock`,
 //! `ros2 bag play --clock` or a simulator). Like rclcpp and rclpy, simulated time is zero until
 //! the first `/clock` message arrives, and it follows the source when it jumps back (a looped
-//! bag).
+//! bag). `use_sim_time` may also be switched at run time (`ros2 param set`), as in rclcpp: the
+//! node subscribes to `/clock` when it is first needed.
 //!
 //! ros2-client's own spinner subscribes to `/clock` too, but as `builtin_interfaces/msg/Time`
 //! and reliable, which matches no stock time source (they publish `rosgraph_msgs/msg/Clock`,
@@ -19,14 +20,6 @@ use crate::{node::CellNode, pubsub::Subscriber, qos::QosPreset};
 /// The topic a ROS 2 time source publishes on.
 pub const CLOCK_TOPIC: &str = "/clock";
 
-/// Where a node's [`CellNode::now`] comes from.
-pub(crate) enum NodeClock {
-    /// The system (wall) clock.
-    System,
-    /// The last `/clock` message.
-    Simulated(SimulatedTime),
-}
-
 /// The latest `/clock` time, kept up to date by a task that ends when this is dropped.
 pub(crate) struct SimulatedTime {
     latest: Arc<Mutex<Time>>,
@@ -39,21 +32,22 @@ impl Drop for SimulatedTime {
     }
 }
 
-impl NodeClock {
-    /// The current time on this clock.
+impl SimulatedTime {
+    /// The last `/clock` time (zero before the first).
     pub(crate) fn now(&self) -> Time {
-        match self {
-            NodeClock::System => Time::now(),
-            NodeClock::Simulated(sim) => *sim.latest.lock().unwrap_or_else(|p| p.into_inner()),
-        }
+        *self.latest.lock().unwrap_or_else(|p| p.into_inner())
     }
 }
 
-/// Subscribes `node` to `/clock` and follows it. Must run inside a tokio runtime.
+/// Subscribes `node` to `/clock` and follows it.
 ///
 /// # Errors
-/// The subscription cannot be created.
+/// No tokio runtime on this thread; the subscription cannot be created.
 pub(crate) fn follow_clock(node: &CellNode) -> anyhow::Result<SimulatedTime> {
+    // `now()` may be asked from a plain thread; subscribing needs the runtime.
+    let runtime = tokio::runtime::Handle::try_current()
+        .map_err(|_| anyhow::anyhow!("no tokio runtime on this thread"))?;
+    let _entered = runtime.enter();
     let mut clock = Subscriber::<Clock>::new(node, CLOCK_TOPIC, QosPreset::Clock)?;
     let latest = Arc::new(Mutex::new(Time::default()));
     let writer = latest.clone();

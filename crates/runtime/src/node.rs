@@ -13,7 +13,7 @@ use serde::de::DeserializeOwned;
 
 use crate::{
     args::{resolve_topic, NodeArgs},
-    clock::{follow_clock, NodeClock},
+    clock::{follow_clock, SimulatedTime},
     fastpath::FastPath,
     params::ParamSources,
     rerun_sink::{RerunSink, RerunTarget},
@@ -199,7 +199,7 @@ struct NodeInner {
     fast_path: Option<FastPath>,
     rerun: RerunSink,
     shutdown: Shutdown,
-    clock: std::sync::OnceLock<NodeClock>,
+    sim_time: std::sync::OnceLock<SimulatedTime>,
 }
 
 /// A running ROS 2 node: DDS participant, names and remappings, parameters, fast path, Rerun
@@ -332,26 +332,42 @@ impl CellNode {
                 fast_path,
                 rerun,
                 shutdown: setup.shutdown,
-                clock: std::sync::OnceLock::new(),
+                sim_time: std::sync::OnceLock::new(),
             }),
         };
-        let clock = if node.inner.standard.use_sim_time {
-            NodeClock::Simulated(follow_clock(&node).context("following /clock (use_sim_time)")?)
-        } else {
-            NodeClock::System
-        };
-        let _ = node.inner.clock.set(clock);
+        if node.inner.standard.use_sim_time {
+            let sim = follow_clock(&node).context("following /clock (use_sim_time)")?;
+            let _ = node.inner.sim_time.set(sim);
+        }
         Ok(node)
     }
 
-    /// The node's current time: the system clock, or with `use_sim_time` the last `/clock`
-    /// message (zero before the first one); see [`crate::clock`]. Stamp what the node publishes
-    /// with this.
+    /// The node's current time: the system clock, or while its `use_sim_time` parameter is
+    /// true (at start-up or set later) the last `/clock` message, zero before the first; see
+    /// [`crate::clock`]. Stamp what the node publishes with this.
     pub fn now(&self) -> Time {
-        self.inner
-            .clock
-            .get()
-            .map_or_else(Time::now, NodeClock::now)
+        let simulated = self.with_ros_node(|n| n.get_parameter("use_sim_time"))
+            == Some(ros2_client::ParameterValue::Boolean(true));
+        if !simulated {
+            return Time::now();
+        }
+        if let Some(sim) = self.inner.sim_time.get() {
+            return sim.now();
+        }
+        match follow_clock(self) {
+            Ok(sim) => {
+                tracing::info!("use_sim_time is now true: following /clock");
+                let _ = self.inner.sim_time.set(sim);
+                self.inner
+                    .sim_time
+                    .get()
+                    .map_or_else(Time::now, SimulatedTime::now)
+            }
+            Err(e) => {
+                tracing::warn!("use_sim_time is true but /clock cannot be followed: {e:#}");
+                Time::now()
+            }
+        }
     }
 
     /// `profile` with the node's `qos_overrides` parameters for `topic` (fully qualified) and
