@@ -547,21 +547,17 @@ fn zigzag_links_never_leave_a_concave_region() {
             infill_link_max_ratio: ratio,
             ..WaamProcess::default()
         };
-        let w = p.fixed_width_mm();
         let tp = plan_layer(&layer(0, vec![u.clone()]), &p, None).unwrap();
-        // Issue 20: infill fills the perimeter's centre line: the U grown by the allowance,
-        // then inset by half a bead.
-        use cell_waam::toolpath::region;
-        let tol = p.arc_tolerance_mm;
-        let grown = region::grow(
-            &region::union(std::slice::from_ref(u)),
-            p.machining_allowance_mm,
-            tol,
-        );
-        let region: Vec<Vec<[f64; 2]>> = region::shrink(&grown, w / 2.0, tol)
-            .into_iter()
-            .flatten()
+        // Issue 20: infill fills the perimeter's centre line as run: the U grown by the
+        // allowance, inset by half a bead, its convex corners pushed out (the slot's reflex
+        // corners stay).
+        let region: Vec<Vec<[f64; 2]>> = tp
+            .segments
+            .iter()
+            .filter(|s| s.role == SegmentRole::Perimeter)
+            .map(|s| s.points.iter().map(|q| [q.x_mm, q.y_mm]).collect())
             .collect();
+        assert_eq!(region.len(), 1, "angle {angle}: one loop");
         let mut n = 0;
         for s in tp.segments.iter().filter(|s| s.role == SegmentRole::Infill) {
             for q in sample(s) {

@@ -15,6 +15,14 @@
 //! 3. the cut segment itself in f64 through the reference's own segment formula (scalar work
 //!    that overlaps the vector kernel's: folding it into the f32 lanes was no faster).
 //!
+//! Where f32 is not enough: a segment that crosses the site's tangent line at a grazing angle
+//! close to the site. The crossing (the visibility clip, eq. 3) moves along the segment by the
+//! f32 rounding of the coordinates divided by the sine of that angle, and the integrand there is
+//! up to 1/d²; a random path grazing a panel midpoint at 0.6° was 2e-3 off. The kernel bounds
+//! that error per lane and hands a lane whose bound exceeds [`CLIP_TOLERANCE`] of the lane's
+//! own value to the reference's f64 formula instead (rare: it needs a wire within about
+//! ε·|coordinates|/[`CLIP_TOLERANCE`] of the site's tangent line, crossing it).
+//!
 //! Written by hand rather than with a SIMD crate's math functions: the kernel is plain f32
 //! arithmetic on fixed-length lane arrays that LLVM vectorises for whichever instruction set
 //! `multiversion` compiled the clone for; `ln` and `atan2` are small polynomial approximations
@@ -33,6 +41,10 @@ use super::{Causal, DistanceLaw, ExposureModel, Panels, Site, WireSegments, CAUS
 pub(super) const BLOCK: usize = 8;
 /// Blocks per bounding-box group.
 pub(super) const GROUP: usize = 8;
+/// Largest relative error of a lane's value allowed from the f32 visibility clip (module docs);
+/// lanes above it are computed in f64.
+const CLIP_TOLERANCE: f32 = 1e-5;
+
 /// f32 lanes of the summation (fixed, whatever the vector width, so that every clone adds in
 /// the same order).
 pub(super) const LANES: usize = 16;
@@ -130,7 +142,6 @@ fn site_value<const FMA: bool>(
         }
         _ => (m, None),
     };
-    let author = model.law == DistanceLaw::AuthorCode;
     let mut total = 0.0f64;
     // Runs of groups not wholly on the inner side of the tangent line (testing single blocks
     // too cost more than it saved). No closure here: a closure would not inherit the clone's
@@ -139,14 +150,14 @@ fn site_value<const FMA: bool>(
     let mut run: Option<usize> = None;
     for g in 0..nblocks.div_ceil(GROUP) {
         if inner_side(&w.groups[g], site) {
-            total += flush::<FMA>(w, &mut run, g * GROUP * BLOCK, end, s32, author);
+            total += flush::<FMA>(model, w, site, &mut run, g * GROUP * BLOCK, end, s32);
             continue;
         }
         if run.is_none() {
             run = Some(g * GROUP * BLOCK);
         }
     }
-    total += flush::<FMA>(w, &mut run, end, end, s32, author);
+    total += flush::<FMA>(model, w, site, &mut run, end, end, s32);
     if let Some((cut_s, cut_j)) = cut {
         total += model.segment_value(w, site, cut_j, cut_s, cut_j);
     }
@@ -155,17 +166,19 @@ fn site_value<const FMA: bool>(
 
 /// Ends the open run (if any) at `stop` (≤ `end`) and returns its sum.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn flush<const FMA: bool>(
+    model: &ExposureModel,
     w: &WireSegments,
+    site: &Site,
     run: &mut Option<usize>,
     stop: usize,
     end: usize,
     s32: &Site32,
-    author: bool,
 ) -> f64 {
     match run.take() {
         Some(start) if stop.min(end) > start => {
-            f64::from(run_sum::<FMA>(w, start, stop.min(end), s32, author))
+            run_sum::<FMA>(model, w, site, start, stop.min(end), s32)
         }
         _ => 0.0,
     }
@@ -184,17 +197,21 @@ fn inner_side(bb: &[f64; 4], s: &Site) -> bool {
 /// (the caller stops before the cut segment). Works in blocks of [`LANES`] segments, each a
 /// fixed-length loop LLVM turns into whole vectors (no scalar remainder): the f32 arrays are
 /// padded with [`LANES`] zero-length segments, and lanes past `j1` get length 0, which makes
-/// them contribute 0.
+/// them contribute 0. Lanes whose f32 clip is too inexact ([`pair`]) are added in f64 by the
+/// reference's formula.
 #[inline(always)]
 fn run_sum<const FMA: bool>(
+    model: &ExposureModel,
     w: &WireSegments,
+    site: &Site,
     j0: usize,
     j1: usize,
     s: &Site32,
-    author: bool,
-) -> f32 {
+) -> f64 {
+    let author = model.law == DistanceLaw::AuthorCode;
     let [px, py, wx, wy, len, wt] = &w.f32;
     let mut acc = [0.0f32; LANES];
+    let mut exact = 0.0f64;
     let mut j = j0;
     while j < j1 {
         let live = j1 - j;
@@ -226,12 +243,15 @@ fn run_sum<const FMA: bool>(
             j += LANES;
             continue;
         }
+        let mut redo = [false; LANES];
         macro_rules! lanes_of {
             ($author:literal, $clip:literal) => {
                 for k in 0..LANES {
-                    acc[k] += pair::<$author, $clip, FMA>(
+                    let (v, r) = pair::<$author, $clip, FMA>(
                         ax[k], ay[k], bx[k], by[k], wx[k], wy[k], l[k], wt[k], s,
                     );
+                    acc[k] += v;
+                    redo[k] = r;
                 }
             };
         }
@@ -240,6 +260,12 @@ fn run_sum<const FMA: bool>(
             (true, false) => lanes_of!(true, false),
             (false, true) => lanes_of!(false, true),
             (false, false) => lanes_of!(false, false),
+        }
+        if redo.iter().any(|&r| r) {
+            for (k, _) in redo.iter().enumerate().filter(|(_, &r)| r) {
+                // Before the cut segment: the cut does not clip it.
+                exact += model.segment_value(w, site, j + k, f64::INFINITY, usize::MAX);
+            }
         }
         j += LANES;
     }
@@ -251,7 +277,7 @@ fn run_sum<const FMA: bool>(
             acc[k] += acc[k + width];
         }
     }
-    acc[0]
+    f64::from(acc[0]) + exact
 }
 
 /// One wire segment's contribution to the site without the causal cut (seed 000 eq. 1–5 in
@@ -260,6 +286,11 @@ fn run_sum<const FMA: bool>(
 /// σ ∈ [lo, hi] where C(σ) ≤ 0 (eq. 2–3); P = |t · w| (eq. 4, unit tangents) times the
 /// segment weight; then ∫ dσ/‖R‖ = ln(g(x₁)/g(x₀)) (`AUTHOR` = false, eq. 5 as printed) or
 /// ∫ dσ/‖R‖² = atan2(d(x₁ − x₀), d² + x₀x₁)/d (`AUTHOR`, the author's code).
+///
+/// Returns (value, redo): with `CLIP`, redo is set (and the value 0) when the f32 clip's error
+/// bound exceeds [`CLIP_TOLERANCE`] of the value: the coordinates' rounding, about
+/// ε·(|a| + |b| + 2|s|) in C, moves the root by l/|C(b) − C(a)| times that, and the integral by
+/// that times the integrand at the root, 1/r² or 1/r with r² = x_root² + d².
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn pair<const AUTHOR: bool, const CLIP: bool, const FMA: bool>(
@@ -272,16 +303,19 @@ fn pair<const AUTHOR: bool, const CLIP: bool, const FMA: bool>(
     l: f32,
     wt: f32,
     s: &Site32,
-) -> f32 {
+) -> (f32, bool) {
     let (rx, ry) = (ax - s.x, ay - s.y);
     // C at the segment's start a and end b (eq. 2), linear in between; from the points
     // themselves, so a segment that starts or ends exactly on the tangent line (a wire vertex
     // at the site, say) clips exactly there.
     // Without `CLIP` the caller knows C ≤ 0 at both ends: all of it is visible.
+    let (ca, cb) = if CLIP {
+        (s.tx * ry - s.ty * rx, s.tx * (by - s.y) - s.ty * (bx - s.x))
+    } else {
+        (0.0, 0.0)
+    };
+    let den = ca - cb;
     let (lo, hi) = if CLIP {
-        let ca = s.tx * ry - s.ty * rx;
-        let cb = s.tx * (by - s.y) - s.ty * (bx - s.x);
-        let den = ca - cb;
         let root = l * (ca / if den == 0.0 { 1.0 } else { den });
         (
             if ca > 0.0 { root } else { 0.0 },
@@ -297,6 +331,9 @@ fn pair<const AUTHOR: bool, const CLIP: bool, const FMA: bool>(
     let d = (rx * wy - ry * wx).abs().max(s.dmin);
     let d2 = d * d;
     let (xl, xh) = (x0 + lo, x0 + hi);
+    // r² at the clipped end (the root), for the error bound.
+    let xr = if ca > 0.0 { xl } else { xh };
+    let rr = fma::<FMA>(xr, xr, d2);
     let v = if AUTHOR {
         atan2_over::<FMA>(d * (hi - lo), fma::<FMA>(xl, xh, d2), d)
     } else {
@@ -314,10 +351,17 @@ fn pair<const AUTHOR: bool, const CLIP: bool, const FMA: bool>(
         };
         ln::<FMA>(((nh * ql) / (qh * nl)).max(1.0))
     };
-    if visible {
-        weight * v
+    let redo = CLIP && visible && ((ca > 0.0) != (cb > 0.0)) && {
+        let eps = f32::EPSILON
+            * (ax.abs() + ay.abs() + bx.abs() + by.abs() + 2.0 * (s.x.abs() + s.y.abs()));
+        // l·eps/|den| · (1/r² or 1/r) > tolerance · v, without divisions.
+        let scale = if AUTHOR { rr } else { rr.sqrt() };
+        l * eps > CLIP_TOLERANCE * v * den.abs() * scale
+    };
+    if visible && !redo {
+        (weight * v, false)
     } else {
-        0.0
+        (0.0, redo)
     }
 }
 

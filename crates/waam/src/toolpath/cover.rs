@@ -9,7 +9,8 @@
 //!    is empty) gets thin-feature beads ([`super::thin`]);
 //! 3. any other piece gets perimeters on T inset by LW/2 (so the bead's outer edge lies on
 //!    T's edge: net surface + allowance) and zig-zag infill up to the innermost perimeter's
-//!    centre line (an infill bead's end then falls inside that perimeter's bead); a convex turn
+//!    centre line as run, pushed corners included (an infill bead's end then falls inside that
+//!    perimeter's bead, and two touching infill beads leave no wedge next to it); a convex turn
 //!    of the outer perimeter moves out along its bisector until its disk reaches T's corner;
 //! 4. what the footprints still leave of T, if thicker than 0.1 mm (or of the part itself, if
 //!    thicker than 0.02 mm), gets thin-feature beads, up to three rounds; a piece still left is
@@ -170,7 +171,10 @@ pub fn cover_layer(rings: &[Vec<P2>], process: &WaamProcess) -> LayerCover {
             continue;
         }
         let one = std::slice::from_ref(shape);
+        // The innermost loops' centre lines (as run, corners pushed), where the infill ends.
+        let mut innermost = Vec::new();
         for k in 0..process.perimeters {
+            innermost.clear();
             for ring in region::shrink(one, w / 2.0 + k as f64 * w, tol)
                 .into_iter()
                 .flatten()
@@ -180,6 +184,7 @@ pub fn cover_layer(rings: &[Vec<P2>], process: &WaamProcess) -> LayerCover {
                 } else {
                     ring
                 };
+                innermost.push(ring.clone());
                 let mut pts = ring.clone();
                 pts.push(ring[0]);
                 out.perimeters.push(PlannedBead {
@@ -191,9 +196,15 @@ pub fn cover_layer(rings: &[Vec<P2>], process: &WaamProcess) -> LayerCover {
             }
         }
         if process.infill {
-            let d = (process.perimeters as f64 * w - w / 2.0).max(w / 2.0);
-            out.infill_region
-                .extend(region::shrink(one, d, tol).into_iter().flatten());
+            if innermost.is_empty() {
+                out.infill_region
+                    .extend(region::shrink(one, w / 2.0, tol).into_iter().flatten());
+            } else {
+                // Up to the loops as run: a pushed corner drags its edges out, and raster lines
+                // that stopped on the unpushed inset would leave a wedge at every seam between
+                // two infill beads next to the perimeter.
+                out.infill_region.extend(innermost);
+            }
         }
     }
     out.target = target;
