@@ -3,8 +3,8 @@
 
 mod common;
 
-use cell_runtime::{args::NodeArgs, CellNode, NodeSetup};
 use cell_msgs::{builtin_interfaces::Time, rosgraph_msgs::Clock};
+use cell_runtime::{args::NodeArgs, CellNode, NodeSetup};
 use common::{fresh_domain, DELIVERY_TIMEOUT};
 use monitor::MonitorParams;
 use ros2_client::{

@@ -6,7 +6,9 @@
 //! of the RViz/Foxglove views in [`nav_msgs`], [`visualization_msgs`], [`sensor_msgs`],
 //! [`tf2_msgs`], [`diagnostic_msgs`]), writes and reads ROS 2 CDR ([`to_cdr`], [`from_cdr`]) and
 //! decodes CDR from the definitions alone ([`dynamic`]). The drift test (`tests/drift.rs`) checks
-//! every Rust type against its definition.
+//! every Rust type against its definition. [`type_hash()`] gives the REP-2011 `RIHS01_` hash of
+//! every interface (messages, services, actions and the types rosidl derives from them), equal to
+//! stock rosidl's ([`type_description`] builds what is hashed).
 //!
 //! Service and action parts are plain messages named like rosidl does:
 //! `cell_msgs/srv/EmitProgram_Request` is [`EmitProgramRequest`] and
@@ -26,6 +28,8 @@ pub mod sensor_msgs;
 pub mod std_msgs;
 pub mod std_srvs;
 pub mod tf2_msgs;
+pub mod type_description;
+pub mod type_hash;
 pub mod visualization_msgs;
 
 mod action;
@@ -45,6 +49,7 @@ pub use msg::{
 pub use srv::{
     EmitProgramRequest, EmitProgramResponse, SendMachineCommandRequest, SendMachineCommandResponse,
 };
+pub use type_hash::{type_hash, TypeHash};
 
 /// A Rust type that mirrors a registered ROS 2 message definition.
 pub trait RosMessage:

@@ -3,6 +3,9 @@
 //! Messages are registered as `pkg/msg/Type`; each service `pkg/srv/Name` contributes
 //! `Name_Request` and `Name_Response`, and each action `pkg/action/Name` contributes
 //! `Name_Goal`, `Name_Result` and `Name_Feedback`.
+//!
+//! A few standard types are known by their definition alone (no Rust type, not in [`list`]):
+//! those the type hashes of services and actions reference, see `DEFINITION_ONLY_FILES`.
 
 use crate::idl::{self, MessageSpec, ParseError};
 
@@ -256,6 +259,48 @@ const FILES: &[(&str, Kind, &str)] = &[
     ),
 ];
 
+/// Standard interfaces known by their definition alone (no Rust type, so not in [`list`] nor
+/// under the drift test): the types that REP-2011 type descriptions of services and actions
+/// reference (`crate::type_hash`), the action cancel/status types and `/rosout`'s `Log`.
+/// Copied unchanged from the ROS 2 Jazzy packages.
+const DEFINITION_ONLY_FILES: &[(&str, Kind, &str)] = &[
+    (
+        "unique_identifier_msgs/msg/UUID",
+        Kind::Msg,
+        include_str!("../std/unique_identifier_msgs/msg/UUID.msg"),
+    ),
+    (
+        "service_msgs/msg/ServiceEventInfo",
+        Kind::Msg,
+        include_str!("../std/service_msgs/msg/ServiceEventInfo.msg"),
+    ),
+    (
+        "action_msgs/msg/GoalInfo",
+        Kind::Msg,
+        include_str!("../std/action_msgs/msg/GoalInfo.msg"),
+    ),
+    (
+        "action_msgs/msg/GoalStatus",
+        Kind::Msg,
+        include_str!("../std/action_msgs/msg/GoalStatus.msg"),
+    ),
+    (
+        "action_msgs/msg/GoalStatusArray",
+        Kind::Msg,
+        include_str!("../std/action_msgs/msg/GoalStatusArray.msg"),
+    ),
+    (
+        "action_msgs/srv/CancelGoal",
+        Kind::Srv,
+        include_str!("../std/action_msgs/srv/CancelGoal.srv"),
+    ),
+    (
+        "rcl_interfaces/msg/Log",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/Log.msg"),
+    ),
+];
+
 /// The line that precedes each dependency in a `ros2msg` complete definition.
 pub const DELIMITER: &str =
     "================================================================================";
@@ -274,11 +319,14 @@ pub fn list() -> Vec<String> {
 
 /// Finds the file and section index that define `ros_name`.
 fn locate(ros_name: &str) -> Option<(&'static str, Kind, &'static str, usize)> {
-    FILES.iter().find_map(|&(file, kind, text)| {
-        let suffix = ros_name.strip_prefix(file)?;
-        let index = kind.parts().iter().position(|p| *p == suffix)?;
-        Some((file, kind, text, index))
-    })
+    FILES
+        .iter()
+        .chain(DEFINITION_ONLY_FILES)
+        .find_map(|&(file, kind, text)| {
+            let suffix = ros_name.strip_prefix(file)?;
+            let index = kind.parts().iter().position(|p| *p == suffix)?;
+            Some((file, kind, text, index))
+        })
 }
 
 /// The `.msg` text of one registered message, as in the file; for a service or action part,

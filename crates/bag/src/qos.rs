@@ -145,35 +145,53 @@ pub fn to_yaml(profiles: &[QosProfile]) -> String {
 }
 
 /// Parses a stored profile list; policies this crate does not model (system default, unknown)
-/// make that profile `None`. An empty string is an empty list.
+/// make that profile `None`. An empty string is an empty list. Policies may be rmw integers (up
+/// to rosbag2 metadata version 8) or rmw's names (`keep_last`, `reliable`, `transient_local`:
+/// version 9, as ROS 2 Jazzy writes them).
 pub fn from_yaml(text: &str) -> Result<Vec<Option<QosProfile>>, String> {
     if text.trim().is_empty() {
         return Ok(Vec::new());
     }
+    /// A policy as an rmw enum integer or its rmw name (`rmw/qos_string_conversions.h`).
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Policy {
+        Number(u8),
+        Name(String),
+    }
+    impl Policy {
+        /// 1 and 2 (the policies modelled here) by number or by their two names.
+        fn code(&self, names: [&str; 2]) -> Option<u8> {
+            match self {
+                Policy::Number(n) => Some(*n),
+                Policy::Name(name) => names.iter().position(|n| n == name).map(|i| i as u8 + 1),
+            }
+        }
+    }
     #[derive(Deserialize)]
     struct Loose {
-        history: u8,
+        history: Policy,
         depth: u32,
-        reliability: u8,
-        durability: u8,
+        reliability: Policy,
+        durability: Policy,
     }
     let list: Vec<Loose> = serde_norway::from_str(text).map_err(|e| e.to_string())?;
     Ok(list
         .into_iter()
         .map(|l| {
             Some(QosProfile {
-                history: match l.history {
+                history: match l.history.code(["keep_last", "keep_all"])? {
                     1 => History::KeepLast,
                     2 => History::KeepAll,
                     _ => return None,
                 },
                 depth: l.depth,
-                reliability: match l.reliability {
+                reliability: match l.reliability.code(["reliable", "best_effort"])? {
                     1 => Reliability::Reliable,
                     2 => Reliability::BestEffort,
                     _ => return None,
                 },
-                durability: match l.durability {
+                durability: match l.durability.code(["transient_local", "volatile"])? {
                     1 => Durability::TransientLocal,
                     2 => Durability::Volatile,
                     _ => return None,
@@ -203,5 +221,25 @@ mod tests {
         assert_eq!(to_yaml(&[]), "");
         assert!(from_yaml("").unwrap().is_empty());
         assert!(from_yaml("- nope").is_err());
+    }
+
+    #[test]
+    fn reads_jazzys_policy_names() {
+        // One profile as rosbag2 Jazzy writes it (metadata version 9, `qos.cpp`).
+        let jazzy = "- history: keep_last\n  depth: 16\n  reliability: reliable\n  \
+                     durability: transient_local\n  deadline:\n    sec: 9223372036\n    \
+                     nsec: 854775807\n  liveliness: automatic\n\
+                     - history: keep_last\n  depth: 1\n  reliability: best_effort\n  \
+                     durability: volatile\n\
+                     - history: system_default\n  depth: 0\n  reliability: reliable\n  \
+                     durability: volatile\n";
+        assert_eq!(
+            from_yaml(jazzy).unwrap(),
+            [
+                Some(QosProfile::reliable_transient_local(16)),
+                Some(QosProfile::best_effort(1)),
+                None
+            ]
+        );
     }
 }

@@ -24,7 +24,7 @@ use mcap::records::op;
 
 use crate::metadata::{self, MetadataFile};
 use crate::scan::{self, Item, ScanError, MAGIC};
-use crate::writer::QOS_KEY;
+use crate::writer::{QOS_KEY, TYPE_HASH_KEY};
 use crate::{BagError, Result};
 
 /// One file of a bag.
@@ -55,6 +55,9 @@ pub struct TopicInfo {
     pub serialization_format: String,
     /// Offered QoS profiles as the stored YAML string (see [`crate::qos::from_yaml`]).
     pub offered_qos_profiles: String,
+    /// REP-2011 type hash `RIHS01_…` from the channel's `topic_type_hash` (as rosbag2 Jazzy
+    /// writes it); empty when the bag has none (older bags, types without a hash).
+    pub type_hash: String,
 }
 
 /// A bag's summary.
@@ -235,6 +238,7 @@ impl BagReader {
                         message_count: count,
                         serialization_format: c.message_encoding.clone(),
                         offered_qos_profiles: c.metadata.get(QOS_KEY).cloned().unwrap_or_default(),
+                        type_hash: c.metadata.get(TYPE_HASH_KEY).cloned().unwrap_or_default(),
                     }),
                 }
                 channels.insert(

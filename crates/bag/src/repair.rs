@@ -96,6 +96,7 @@ pub fn repair(path: impl AsRef<Path>) -> Result<RepairReport> {
                     name: t.name.clone(),
                     type_name: t.type_name.clone(),
                     qos_yaml: t.offered_qos_profiles.clone(),
+                    type_hash: t.type_hash.clone(),
                     message_count: t.message_count,
                 }),
             }

@@ -2,7 +2,8 @@
 //!
 //! Per file: header profile `ros2`; one schema per message type (name `pkg/msg/Type`,
 //! encoding `ros2msg`, data the complete definition with its dependencies); one channel per
-//! topic (message encoding `cdr`, metadata `offered_qos_profiles`); messages as the CDR bytes
+//! topic (message encoding `cdr`, metadata `offered_qos_profiles` and `topic_type_hash`, the
+//! REP-2011 hash, as Jazzy's MCAP storage writes them); messages as the CDR bytes
 //! seen on the wire, log and publish time in ns, a per-topic sequence number from 1. Records
 //! go into zstd chunks with message indexes; `finish` writes the summary (schemas, channels,
 //! statistics, chunk indexes, summary offsets) and footer so readers can seek. Each split file
@@ -39,6 +40,10 @@ pub const LIBRARY: &str = concat!("cellsuite cell_bag ", env!("CARGO_PKG_VERSION
 
 /// Channel metadata key rosbag2 stores the QoS profiles under.
 pub const QOS_KEY: &str = "offered_qos_profiles";
+
+/// Channel metadata key rosbag2's MCAP storage (Jazzy, `mcap_storage.cpp`) stores the topic's
+/// REP-2011 type hash under (the schema carries none there).
+pub const TYPE_HASH_KEY: &str = "topic_type_hash";
 
 /// How a bag is written.
 #[derive(Debug, Clone)]
@@ -78,6 +83,8 @@ struct Topic {
     type_name: String,
     definition: String,
     qos_yaml: String,
+    /// `RIHS01_…` from [`cell_msgs::type_hash()`], empty for a type it does not know.
+    type_hash: String,
     count: u64,
     sequence: u32,
 }
@@ -207,6 +214,9 @@ impl BagWriter {
             type_name: ros_type.to_owned(),
             definition: definition.to_owned(),
             qos_yaml: qos::to_yaml(qos),
+            type_hash: cell_msgs::type_hash(ros_type)
+                .map(|h| h.to_string())
+                .unwrap_or_default(),
             count: 0,
             sequence: 0,
         });
@@ -318,12 +328,15 @@ impl BagWriter {
                 id
             }
         };
-        let metadata = BTreeMap::from([(QOS_KEY.to_owned(), t.qos_yaml.clone())]);
+        let metadata = BTreeMap::from([
+            (QOS_KEY.to_owned(), t.qos_yaml.clone()),
+            (TYPE_HASH_KEY.to_owned(), t.type_hash.clone()),
+        ]);
         let id = file
             .writer
             .add_channel(schema, &t.name, "cdr", &metadata)
             .map_err(|e| BagError::mcap(&file.path, e))?;
-        file.chunk_bytes += (t.name.len() + t.qos_yaml.len() + 40) as u64;
+        file.chunk_bytes += (t.name.len() + t.qos_yaml.len() + t.type_hash.len() + 60) as u64;
         file.channels.insert(topic_index, id);
         Ok(id)
     }
@@ -418,6 +431,7 @@ impl BagWriter {
                 name: t.name.clone(),
                 type_name: t.type_name.clone(),
                 qos_yaml: t.qos_yaml.clone(),
+                type_hash: t.type_hash.clone(),
                 message_count: t.count,
             })
             .collect();

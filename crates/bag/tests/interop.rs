@@ -207,7 +207,17 @@ fn third_party_readers_decode_every_field() {
         ),
         (Some("cdr"), Some("cell_msgs/msg/Toolpath"), Some("ros2msg"))
     );
+    // The REP-2011 hash in the channel metadata (as rosbag2 Jazzy's MCAP storage puts it) and
+    // in metadata.yaml (rosbags reads it from there), for every topic.
     let bag_info = lines.iter().find(|l| l["reader"] == "rosbags-bag").unwrap();
+    let topics = bag_info["topics"].as_array().unwrap();
+    for c in channels {
+        let ros_type = c["schema"].as_str().unwrap();
+        let hash = cell_msgs::type_hash(ros_type).unwrap().to_string();
+        assert_eq!(c["type_hash"], hash, "mcap channel {}", c["topic"]);
+        let t = topics.iter().find(|t| t["topic"] == c["topic"]).unwrap();
+        assert_eq!(t["type_hash"], hash, "rosbags {}", c["topic"]);
+    }
     assert_eq!(bag_info["message_count"], expected.len());
     let qos = |topic: &str| {
         bag_info["topics"]
@@ -279,7 +289,7 @@ fn metadata_yaml_and_info_display() {
     let text = std::fs::read_to_string(bag.join("metadata.yaml")).unwrap();
     assert!(
         text.starts_with(
-            "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: mcap\n"
+            "rosbag2_bagfile_information:\n  version: 8\n  storage_identifier: mcap\n"
         ),
         "{text}"
     );
@@ -310,6 +320,25 @@ fn metadata_yaml_and_info_display() {
     );
     assert_eq!(tp.topic_metadata.serialization_format, "cdr");
     assert_eq!(tp.message_count, 1);
+    // rosbag2 version 7's hash and version 8's distro; our reader sees the channel's hash.
+    let toolpath_hash = cell_msgs::type_hash(Toolpath::ROS_NAME)
+        .unwrap()
+        .to_string();
+    assert_eq!(tp.topic_metadata.type_description_hash, toolpath_hash);
+    assert!(
+        text.contains(&format!("      type_description_hash: {toolpath_hash}\n")),
+        "{text}"
+    );
+    assert_eq!(meta.ros_distro, "jazzy");
+    assert!(
+        text.contains("\n  custom_data: {}\n  ros_distro: jazzy\n"),
+        "{text}"
+    );
+    let ours = BagInfo::open(&bag).unwrap();
+    for t in &ours.topics {
+        let hash = cell_msgs::type_hash(&t.type_name).unwrap().to_string();
+        assert_eq!(t.type_hash, hash, "{}", t.name);
+    }
     assert_eq!(
         cell_bag::qos::from_yaml(&tp.topic_metadata.offered_qos_profiles).unwrap(),
         [Some(QosProfile::reliable_transient_local(16))]

@@ -7,6 +7,7 @@
 //! - [`params`]: ROS 2 parameter YAML validated into typed structs;
 //! - [`node`]: [`CellNode`], one DDS participant per node, `ROS_DOMAIN_ID`, interface binding;
 //! - [`qos`]: QoS presets for plans, streams and status;
+//! - [`type_hash`]: the REP-2011 type hash every endpoint announces in its DDS USER_DATA;
 //! - [`pubsub`]: typed publish/subscribe, DDS plus the iceoryx2 [`fastpath`] for large messages;
 //! - [`rerun_sink`]: the shared Rerun sink and its entity-path conventions;
 //! - [`views`]: the standard-type views for RViz and Foxglove ([`cell_views`]);
@@ -29,6 +30,7 @@ pub mod rosout;
 pub mod service;
 pub mod shutdown;
 pub mod standard_params;
+pub mod type_hash;
 pub mod views;
 
 use std::{future::Future, process::ExitCode};

@@ -269,6 +269,8 @@ impl CellNode {
         let participant = participant
             .build()
             .with_context(|| format!("DDS participant on domain {}", setup.domain_id))?;
+        // Every endpoint announces its REP-2011 type hash, as Jazzy peers expect.
+        participant.set_endpoint_user_data(crate::type_hash::user_data);
         let context = Context::from_domain_participant(participant).context("ROS 2 context")?;
         let mut options = ros2_client::NodeOptions::new().enable_rosout(true);
         for (key, value) in declared {

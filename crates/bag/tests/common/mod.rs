@@ -46,7 +46,10 @@ fn single(base: &BaseType, n: &mut u64) -> Value {
     let (i, f) = (*n as i64, *n as f64);
     match prim {
         Bool => json!(n.is_multiple_of(2)),
-        Byte | Char | Uint8 => json!(*n % 250 + 1),
+        // rosbags 0.11 reads `byte` as int8 (ROS 1's meaning); ROS 2's is an octet. Values
+        // below 128 read the same either way.
+        Byte => json!(*n % 127 + 1),
+        Char | Uint8 => json!(*n % 250 + 1),
         Int8 => json!(-(i % 120) - 1),
         Uint16 => json!(1_000 + *n),
         Int16 => json!(-1_000 - i),

@@ -16,6 +16,7 @@ import json
 import sys
 from pathlib import Path
 
+import rosbags.highlevel.anyreader
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
@@ -48,6 +49,21 @@ def plain(v):
     return {k: plain(getattr(v, k)) for k in names if not k.startswith("_") and not k.isupper()}
 
 
+def types_from_msg(text, name):
+    """`get_types_from_msg`, with a service part under its real name: rosbags 0.11 files
+    `pkg/srv/Name_Request` under `pkg/srv/msg/Name_Request`."""
+    types = get_types_from_msg(text, name)
+    if name not in types and "/srv/" in name:
+        pkg, _, rest = name.partition("/srv/")
+        types[name] = types.pop(f"{pkg}/srv/msg/{rest}")
+    return types
+
+
+# AnyReader checks every connection's RIHS01 type hash (metadata.yaml's type_description_hash)
+# against its own hash of the bag's definitions; misfiled, a service part has none (KeyError).
+rosbags.highlevel.anyreader.get_types_from_msg = types_from_msg
+
+
 def emit(**kw):
     print(json.dumps(kw, allow_nan=False), flush=True)
 
@@ -78,6 +94,7 @@ def main(bag: Path) -> None:
                         "schema": summary.schemas[c.schema_id].name,
                         "schema_encoding": summary.schemas[c.schema_id].encoding,
                         "qos": c.metadata.get("offered_qos_profiles"),
+                        "type_hash": c.metadata.get("topic_type_hash"),
                     }
                     for c in summary.channels.values()
                 ],
@@ -94,16 +111,10 @@ def main(bag: Path) -> None:
                     value=plain(decoded),
                 )
 
-    # A typestore from the bag's own definitions, independent of AnyReader's. rosbags 0.11
-    # files a service part `pkg/srv/Name_Request` under `pkg/srv/msg/Name_Request`; it is
-    # registered here under its real name so those types decode too.
+    # A typestore from the bag's own definitions, independent of AnyReader's.
     store = get_typestore(Stores.EMPTY)
     for name, text in schemas.items():
-        types = get_types_from_msg(text, name)
-        if name not in types and "/srv/" in name:
-            pkg, _, rest = name.partition("/srv/")
-            types[name] = types.pop(f"{pkg}/srv/msg/{rest}")
-        store.register(types)
+        store.register(types_from_msg(text, name))
 
     with AnyReader([bag]) as reader:
         emit(
@@ -116,6 +127,8 @@ def main(bag: Path) -> None:
                     "topic": c.topic,
                     "type": c.msgtype,
                     "count": c.msgcount,
+                    # rosbags reads metadata.yaml's type_description_hash into `digest`.
+                    "type_hash": c.digest,
                     "qos": [
                         {
                             "reliability": q.reliability.name,

@@ -541,6 +541,27 @@ impl DomainParticipant {
     self.dpi.lock().ok().and_then(|g| g.only_networks())
   }
 
+  // cellsuite: added (vendor/README.md, patch 3), through the closing brace of
+  // `endpoint_user_data` below.
+  /// Chooses the USER_DATA (DDS 1.4 §2.2.3.1) each DataWriter and DataReader
+  /// created from now on announces in discovery (SEDP), from its type name;
+  /// an empty result announces none. ROS 2 puts the REP-2011 type hash there.
+  pub fn set_endpoint_user_data(
+    &self,
+    by_type_name: impl Fn(&str) -> Vec<u8> + Send + Sync + 'static,
+  ) {
+    if let Ok(mut dpd) = self.dpi.lock() {
+      dpd.endpoint_user_data = Some(Arc::new(by_type_name));
+    }
+  }
+
+  /// The USER_DATA a new endpoint of this type announces. The function runs
+  /// without the participant lock held, so it may take its own locks.
+  pub(crate) fn endpoint_user_data(&self, type_name: &str) -> Vec<u8> {
+    let by_type_name = self.dpi.lock().ok().and_then(|g| g.endpoint_user_data.clone());
+    by_type_name.map_or_else(Vec::new, |f| f(type_name))
+  } // cellsuite: end of the added methods
+
   /// Gets all DiscoveredTopics from DDS network
   ///
   /// # Examples
@@ -958,7 +979,11 @@ pub(crate) struct DomainParticipantDisc {
   discovery_join_handle: std::sync::mpsc::Receiver<JoinHandle<()>>,
   // This allows deterministic generation of EntityIds for DataReader, DataWriter, etc.
   entity_id_generator: atomic::AtomicU32,
+  endpoint_user_data: Option<EndpointUserData>, // cellsuite: see set_endpoint_user_data
 }
+
+// cellsuite: USER_DATA of a new local endpoint, by its type name.
+type EndpointUserData = Arc<dyn Fn(&str) -> Vec<u8> + Send + Sync>;
 
 impl DomainParticipantDisc {
   #[allow(clippy::too_many_arguments)]
@@ -1003,6 +1028,7 @@ impl DomainParticipantDisc {
       discovery_command_sender,
       discovery_join_handle,
       entity_id_generator: atomic::AtomicU32::new(0),
+      endpoint_user_data: None, // cellsuite
     })
   }
 

@@ -418,11 +418,12 @@ impl PlCdrDeserialize for DiscoveredReaderData {
 
     let qos = QosPolicies::from_parameter_list(ctx, &pl_map)?;
 
-    let user_data = pl_map
-      .get(&ParameterId::PID_USER_DATA)
-      .and_then(|v| v.first())
-      .map(|p| p.value.clone())
-      .unwrap_or_default();
+    // cellsuite: the octets of the sequence<octet>, without its length and padding
+    let user_data: Vec<u8> = // cellsuite
+      get_option_from_pl_map(&pl_map, ctx, ParameterId::PID_USER_DATA, "user data") // cellsuite
+        .ok() // cellsuite: a malformed USER_DATA is ignored, not the endpoint
+        .flatten() // cellsuite
+        .unwrap_or_default(); // cellsuite
 
     Ok(DiscoveredReaderData {
       reader_proxy: ReaderProxy::new(
@@ -498,7 +499,7 @@ impl ParameterListable for DiscoveredReaderData {
           security_info,
         },
       content_filter,
-      user_data: _,
+      user_data, // cellsuite: was `user_data: _` (never written)
     } = self;
 
     let mut pl = ParameterList::new();
@@ -552,6 +553,9 @@ impl ParameterListable for DiscoveredReaderData {
     emit!(PID_TOPIC_NAME, &topic_name.clone().into(), StringWithNul);
     emit!(PID_TYPE_NAME, &type_name.clone().into(), StringWithNul);
     pl.parameters.append(&mut qos.to_parameter_list(ctx)?);
+    if !user_data.is_empty() { // cellsuite
+      emit!(PID_USER_DATA, user_data, Vec<u8>); // cellsuite: sequence<octet>, as parsed
+    } // cellsuite
     emit_option!(
       PID_SERVICE_INSTANCE_NAME,
       &service_instance_name.clone().map(|e| e.into()),
@@ -810,7 +814,7 @@ impl DiscoveredWriterData {
       last_updated: Instant::now(),
       writer_proxy,
       publication_topic_data,
-      user_data: Vec::new(),
+      user_data: dp.endpoint_user_data(topic.get_type().name()), // cellsuite
     }
   }
 }
@@ -877,11 +881,12 @@ impl PlCdrDeserialize for DiscoveredWriterData {
 
     let qos = QosPolicies::from_parameter_list(ctx, &pl_map)?;
 
-    let user_data = pl_map
-      .get(&ParameterId::PID_USER_DATA)
-      .and_then(|v| v.first())
-      .map(|p| p.value.clone())
-      .unwrap_or_default();
+    // cellsuite: the octets of the sequence<octet>, without its length and padding
+    let user_data: Vec<u8> = // cellsuite
+      get_option_from_pl_map(&pl_map, ctx, ParameterId::PID_USER_DATA, "user data") // cellsuite
+        .ok() // cellsuite: a malformed USER_DATA is ignored, not the endpoint
+        .flatten() // cellsuite
+        .unwrap_or_default(); // cellsuite
 
     Ok(DiscoveredWriterData {
       last_updated: Instant::now(),
@@ -956,7 +961,7 @@ impl ParameterListable for DiscoveredWriterData {
           #[cfg(feature = "security")]
           security_info,
         },
-      user_data: _,
+      user_data, // cellsuite: was `user_data: _` (never written)
     } = self;
 
     let mut pl = ParameterList::new();
@@ -1010,6 +1015,9 @@ impl ParameterListable for DiscoveredWriterData {
     emit!(PID_TOPIC_NAME, &topic_name.clone().into(), StringWithNul);
     emit!(PID_TYPE_NAME, &type_name.clone().into(), StringWithNul);
     pl.parameters.append(&mut qos.to_parameter_list(ctx)?);
+    if !user_data.is_empty() { // cellsuite
+      emit!(PID_USER_DATA, user_data, Vec<u8>); // cellsuite: sequence<octet>, as parsed
+    } // cellsuite
     emit_option!(
       PID_SERVICE_INSTANCE_NAME,
       &service_instance_name.clone().map(|e| e.into()),
