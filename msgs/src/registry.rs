@@ -299,6 +299,83 @@ const DEFINITION_ONLY_FILES: &[(&str, Kind, &str)] = &[
         Kind::Msg,
         include_str!("../std/rcl_interfaces/msg/Log.msg"),
     ),
+    // The parameter services and events ros2-client serves on every node (their endpoints
+    // announce these hashes too).
+    (
+        "rcl_interfaces/msg/FloatingPointRange",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/FloatingPointRange.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/IntegerRange",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/IntegerRange.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/ListParametersResult",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/ListParametersResult.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/Parameter",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/Parameter.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/ParameterDescriptor",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/ParameterDescriptor.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/ParameterEvent",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/ParameterEvent.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/ParameterType",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/ParameterType.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/ParameterValue",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/ParameterValue.msg"),
+    ),
+    (
+        "rcl_interfaces/msg/SetParametersResult",
+        Kind::Msg,
+        include_str!("../std/rcl_interfaces/msg/SetParametersResult.msg"),
+    ),
+    (
+        "rcl_interfaces/srv/DescribeParameters",
+        Kind::Srv,
+        include_str!("../std/rcl_interfaces/srv/DescribeParameters.srv"),
+    ),
+    (
+        "rcl_interfaces/srv/GetParameterTypes",
+        Kind::Srv,
+        include_str!("../std/rcl_interfaces/srv/GetParameterTypes.srv"),
+    ),
+    (
+        "rcl_interfaces/srv/GetParameters",
+        Kind::Srv,
+        include_str!("../std/rcl_interfaces/srv/GetParameters.srv"),
+    ),
+    (
+        "rcl_interfaces/srv/ListParameters",
+        Kind::Srv,
+        include_str!("../std/rcl_interfaces/srv/ListParameters.srv"),
+    ),
+    (
+        "rcl_interfaces/srv/SetParameters",
+        Kind::Srv,
+        include_str!("../std/rcl_interfaces/srv/SetParameters.srv"),
+    ),
+    (
+        "rcl_interfaces/srv/SetParametersAtomically",
+        Kind::Srv,
+        include_str!("../std/rcl_interfaces/srv/SetParametersAtomically.srv"),
+    ),
 ];
 
 /// The line that precedes each dependency in a `ros2msg` complete definition.

@@ -44,3 +44,54 @@ fn every_hash_of_the_built_package_matches() {
     let cell = stock.keys().filter(|n| n.starts_with("cell_msgs/")).count();
     assert_eq!(cell, 11 + 2 * 4 + 4 * 13, "{:?}", stock.keys());
 }
+
+/// The parameter services and events every node serves (created by ros2-client) hash as
+/// stock's `rcl_interfaces` in the Jazzy venv says.
+#[test]
+fn the_parameter_interfaces_match_stock_rcl_interfaces() {
+    let Some(jazzy) = cell_testkit::jazzy_workspace(Path::new(env!("CARGO_TARGET_TMPDIR"))) else {
+        return;
+    };
+    // The venv is the install's sibling prefix: bin/python's parent's parent.
+    let venv = jazzy.python.parent().and_then(Path::parent).expect("venv");
+    let share = venv.join("share/rcl_interfaces");
+    let mut checked = 0;
+    for (kind, names) in [
+        (
+            "msg",
+            &[
+                "ParameterEvent",
+                "Parameter",
+                "ParameterValue",
+                "ParameterDescriptor",
+            ][..],
+        ),
+        (
+            "srv",
+            &[
+                "DescribeParameters",
+                "GetParameterTypes",
+                "GetParameters",
+                "ListParameters",
+                "SetParameters",
+                "SetParametersAtomically",
+            ][..],
+        ),
+    ] {
+        for name in names {
+            let path = share.join(kind).join(format!("{name}.json"));
+            let text = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let json: serde_json::Value = serde_json::from_str(&text).expect("json");
+            for entry in json["type_hashes"].as_array().expect("type_hashes") {
+                let type_name = entry["type_name"].as_str().expect("type_name");
+                let hash = entry["hash_string"].as_str().expect("hash_string");
+                let ours =
+                    cell_msgs::type_hash(type_name).unwrap_or_else(|e| panic!("{type_name}: {e}"));
+                assert_eq!(ours.to_string(), hash, "{type_name}");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 40, "{checked} hashes checked");
+}
