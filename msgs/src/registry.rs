@@ -376,6 +376,22 @@ const DEFINITION_ONLY_FILES: &[(&str, Kind, &str)] = &[
         Kind::Srv,
         include_str!("../std/rcl_interfaces/srv/SetParametersAtomically.srv"),
     ),
+    // The graph-information topic every ROS 2 participant publishes (`ros_discovery_info`).
+    (
+        "rmw_dds_common/msg/Gid",
+        Kind::Msg,
+        include_str!("../std/rmw_dds_common/msg/Gid.msg"),
+    ),
+    (
+        "rmw_dds_common/msg/NodeEntitiesInfo",
+        Kind::Msg,
+        include_str!("../std/rmw_dds_common/msg/NodeEntitiesInfo.msg"),
+    ),
+    (
+        "rmw_dds_common/msg/ParticipantEntitiesInfo",
+        Kind::Msg,
+        include_str!("../std/rmw_dds_common/msg/ParticipantEntitiesInfo.msg"),
+    ),
 ];
 
 /// The line that precedes each dependency in a `ros2msg` complete definition.

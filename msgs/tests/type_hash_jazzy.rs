@@ -45,8 +45,9 @@ fn every_hash_of_the_built_package_matches() {
     assert_eq!(cell, 11 + 2 * 4 + 4 * 13, "{:?}", stock.keys());
 }
 
-/// The parameter services and events every node serves (created by ros2-client) hash as
-/// stock's `rcl_interfaces` in the Jazzy venv says.
+/// The parameter services and events every node serves and the graph information it publishes
+/// (endpoints ros2-client creates) hash as stock `rcl_interfaces` and `rmw_dds_common` in the
+/// Jazzy venv say.
 #[test]
 fn the_parameter_interfaces_match_stock_rcl_interfaces() {
     let Some(jazzy) = cell_testkit::jazzy_workspace(Path::new(env!("CARGO_TARGET_TMPDIR"))) else {
@@ -93,5 +94,19 @@ fn the_parameter_interfaces_match_stock_rcl_interfaces() {
             }
         }
     }
-    assert!(checked >= 40, "{checked} hashes checked");
+    let path = venv.join("share/rmw_dds_common/msg/ParticipantEntitiesInfo.json");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("stock rmw_dds_common"))
+            .expect("json");
+    for entry in json["type_hashes"].as_array().expect("type_hashes") {
+        let type_name = entry["type_name"].as_str().expect("type_name");
+        let ours = cell_msgs::type_hash(type_name).unwrap_or_else(|e| panic!("{type_name}: {e}"));
+        assert_eq!(
+            ours.to_string(),
+            entry["hash_string"].as_str().unwrap(),
+            "{type_name}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 43, "{checked} hashes checked");
 }
