@@ -18,8 +18,8 @@ use cell_msgs::{
 use cell_profiles::MachineProfile;
 use cell_runtime::{CellNode, QosPreset};
 use common::machines::{
-    accepted, emitted, execute, goal, grbl_program, grbl_sim, operator, sent_lines, status_until,
-    texts, wing_panel, Operator,
+    accepted, emitted, execute, goal, grbl_program, grbl_sim, grbl_sim_with, operator, sent_lines,
+    status_until, texts, wing_panel, Operator,
 };
 use common::{fresh_domain, node, within, DELIVERY_TIMEOUT};
 use machine_bridge::{run, BridgeParams};
@@ -577,6 +577,177 @@ async fn hold_resume_and_abort_from_topic_and_service_act_within_one_status_cycl
     );
     assert!(!sim.snapshot().spindle_on, "heat off after the abort");
     assert!(!bridge.is_finished());
+    bridge.abort();
+}
+
+/// A bridge on a fresh domain driving a simulator whose feed holds take `accel_mm_s2` to stop
+/// (the wing panel cuts at 4 mm/s), the operator and the command service.
+async fn slow_stopping_cell(
+    dir: &std::path::Path,
+    id: &str,
+    accel_mm_s2: f64,
+    extra: &str,
+) -> (
+    cell_grbl::sim::SimHandle,
+    tokio::task::JoinHandle<anyhow::Result<()>>,
+    Operator,
+    cell_runtime::ServiceClient<SendMachineCommandRequest, SendMachineCommandResponse>,
+) {
+    let cfg = cell_grbl::sim::SimConfig {
+        time_scale: 4.0,
+        accel_mm_s2,
+        ..cell_grbl::sim::SimConfig::default()
+    };
+    let (sim, file) = grbl_sim_with(dir, id, cfg, extra).await;
+    let domain = fresh_domain();
+    let bridge = start_bridge(domain, vec![file]);
+    let op = operator(domain).await;
+    let service = op
+        .node
+        .service_client::<SendMachineCommandRequest, SendMachineCommandResponse>("/machine_command")
+        .unwrap();
+    assert!(
+        op.node
+            .wait_for_service("/machine_command", DELIVERY_TIMEOUT)
+            .await
+    );
+    (sim, bridge, op, service)
+}
+
+async fn send(
+    service: &cell_runtime::ServiceClient<SendMachineCommandRequest, SendMachineCommandResponse>,
+    machine_id: &str,
+    command: u8,
+) -> SendMachineCommandResponse {
+    service
+        .call(
+            SendMachineCommandRequest {
+                command: MachineCommand {
+                    machine_id: machine_id.into(),
+                    command,
+                    value: 0,
+                },
+            },
+            DELIVERY_TIMEOUT,
+        )
+        .await
+        .unwrap()
+}
+
+/// The states the simulator was in when each `~` arrived.
+fn cycle_starts(sim: &cell_grbl::sim::SimHandle) -> Vec<MachineState> {
+    sim.events()
+        .iter()
+        .filter_map(|e| match e {
+            SimEvent::Realtime {
+                command: Realtime::CycleStart,
+                state,
+                ..
+            } => Some(*state),
+            _ => None,
+        })
+        .collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_resume_sent_while_the_hold_decelerates_runs_the_program_to_the_end() {
+    // 4 mm/s at 1 mm/s²: four simulated seconds (one real second) to stop. GRBL drops a `~`
+    // that comes before the stop; the resume right after the hold lands inside it.
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, bridge, mut op, service) = slow_stopping_cell(dir.path(), "heavy", 1.0, "").await;
+    let program = grbl_program("wing-quick-resume", 300);
+    let sent = sent_lines(&program);
+    let Operator { client, status, .. } = &mut op;
+    let operate = async {
+        status_until(status, "heavy", |s| {
+            s.state == MachineStatus::STATE_RUNNING && s.acked_line > 20
+        })
+        .await;
+        let held = send(&service, "heavy", MachineCommand::COMMAND_HOLD).await;
+        assert!(held.success, "{}", held.message);
+        let resumed = send(&service, "heavy", MachineCommand::COMMAND_RESUME).await;
+        assert!(
+            cycle_starts(&sim) != [MachineState::Hold(1)],
+            "the resume went out during the deceleration, where GRBL drops it: {}",
+            resumed.message
+        );
+        assert!(resumed.success, "{}", resumed.message);
+        assert!(
+            resumed.message.contains("taken") && resumed.message.contains("Hold:0"),
+            "{}",
+            resumed.message
+        );
+        resumed
+    };
+    let ((result, _), resumed) = tokio::join!(
+        execute(client, goal(&program, "heavy"), Duration::from_secs(300)),
+        operate
+    );
+    assert!(
+        result.success,
+        "{} (resume: {})",
+        result.message, resumed.message
+    );
+    assert_eq!(result.outcome, R::OUTCOME_FINISHED);
+    assert_eq!(
+        sim.executed_lines(),
+        texts(&sent),
+        "every line acknowledged and run once"
+    );
+    assert_eq!(
+        cycle_starts(&sim),
+        [MachineState::Hold(0)],
+        "one `~`, sent once the hold was complete"
+    );
+    status_until(status, "heavy", |s| s.state == MachineStatus::STATE_DONE).await;
+    assert!(!sim.snapshot().spindle_on, "heat off at the end (M5)");
+    bridge.abort();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_resume_the_controller_cannot_take_in_time_answers_failure_and_sends_nothing() {
+    // 4 mm/s at 0.25 mm/s²: sixteen simulated seconds (four real ones) to stop, against a
+    // 0.5 s resume.
+    let dir = tempfile::tempdir().unwrap();
+    let (sim, bridge, mut op, service) =
+        slow_stopping_cell(dir.path(), "glacial", 0.25, "resume_timeout_s: 0.5\n").await;
+    let program = grbl_program("wing-slow-stop", 300);
+    let sent = sent_lines(&program);
+    let Operator { client, status, .. } = &mut op;
+    let operate = async {
+        status_until(status, "glacial", |s| {
+            s.state == MachineStatus::STATE_RUNNING && s.acked_line > 20
+        })
+        .await;
+        let held = send(&service, "glacial", MachineCommand::COMMAND_HOLD).await;
+        assert!(held.success, "{}", held.message);
+        let refused = send(&service, "glacial", MachineCommand::COMMAND_RESUME).await;
+        assert!(!refused.success, "{}", refused.message);
+        assert!(
+            refused.message.contains("glacial")
+                && refused.message.contains("Hold:1")
+                && refused.message.contains("not sent"),
+            "{}",
+            refused.message
+        );
+        assert!(cycle_starts(&sim).is_empty(), "no `~` went out");
+        assert_eq!(sim.snapshot().state, MachineState::Hold(1));
+        // Once the machine has stopped, the resume is taken and the program goes on.
+        sim.wait_for(Duration::from_secs(60), |s| {
+            s.state == MachineState::Hold(0)
+        })
+        .await
+        .expect("the hold completes");
+        let resumed = send(&service, "glacial", MachineCommand::COMMAND_RESUME).await;
+        assert!(resumed.success, "{}", resumed.message);
+    };
+    let ((result, _), ()) = tokio::join!(
+        execute(client, goal(&program, "glacial"), Duration::from_secs(300)),
+        operate
+    );
+    assert!(result.success, "{}", result.message);
+    assert_eq!(sim.executed_lines(), texts(&sent));
+    assert_eq!(cycle_starts(&sim), [MachineState::Hold(0)]);
     bridge.abort();
 }
 

@@ -99,11 +99,24 @@ pub async fn grbl_sim(
     time_scale: f64,
     extra: &str,
 ) -> (SimHandle, String) {
-    let sim = sim::start(SimConfig {
+    let cfg = SimConfig {
         time_scale,
-        axes: vec!['X', 'Y', 'U', 'V'],
         faults,
         ..SimConfig::default()
+    };
+    grbl_sim_with(dir, id, cfg, extra).await
+}
+
+/// [`grbl_sim`] with the simulator's settings given whole (axes become `XYUV`).
+pub async fn grbl_sim_with(
+    dir: &Path,
+    id: &str,
+    cfg: SimConfig,
+    extra: &str,
+) -> (SimHandle, String) {
+    let sim = sim::start(SimConfig {
+        axes: vec!['X', 'Y', 'U', 'V'],
+        ..cfg
     });
     let addr = sim.listen_tcp("127.0.0.1:0").await.unwrap();
     let path = dir.join(format!("{id}.yaml"));

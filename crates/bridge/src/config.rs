@@ -16,6 +16,7 @@
 //! status_period_s: 0.1              # `?` poll and MachineStatus period (GRBL: at most 5 Hz advised)
 //! on_fault: safe_stop               # or hold: leave the machine in feed hold
 //! resume_after_link_drop: operator  # or auto: reconnect and go on from the last acked line + 1
+//! resume_timeout_s: 3               # resume: longest wait for the hold to complete (Hold:0)
 //! allowed_commands: ["$H"]          # controller commands a program may carry; others are refused
 //! ```
 //!
@@ -378,6 +379,11 @@ pub struct GrblControllerConfig {
     /// attempt (s), 0.5..120.
     #[serde(default = "default_command_timeout")]
     pub command_timeout_s: f64,
+    /// Longest time (s), 0.5..120, a resume takes: waiting for the feed hold to complete before
+    /// it sends `~` (GRBL drops a `~` while the hold decelerates), then for the controller to
+    /// leave the hold (at least 1 s for that). Under `cell machine`'s 5 s answer timeout.
+    #[serde(default = "default_resume_timeout")]
+    pub resume_timeout_s: f64,
     /// Status poll and `MachineStatus` period (s).
     #[serde(default = "default_status_period")]
     pub status_period_s: f64,
@@ -410,6 +416,10 @@ fn default_rx() -> usize {
 
 fn default_command_timeout() -> f64 {
     10.0
+}
+
+fn default_resume_timeout() -> f64 {
+    3.0
 }
 
 fn default_status_period() -> f64 {
@@ -475,6 +485,12 @@ impl GrblControllerConfig {
         in_range(
             "command_timeout_s",
             self.command_timeout_s,
+            Allowed::closed(0.5, 120.0),
+            "s",
+        )?;
+        in_range(
+            "resume_timeout_s",
+            self.resume_timeout_s,
             Allowed::closed(0.5, 120.0),
             "s",
         )?;
@@ -686,6 +702,8 @@ mod tests {
         assert!(e.contains("Z is not an axis of machine grbl-xy"), "{e}");
         let e = err("id: a\nprotocol: grbl\nstatus_period_s: 5\nendpoint: {tcp: 'h:1'}\n");
         assert!(e.contains("status_period_s"), "{e}");
+        let e = err("id: a\nprotocol: grbl\nresume_timeout_s: 0\nendpoint: {tcp: 'h:1'}\n");
+        assert!(e.contains("resume_timeout_s"), "{e}");
         let e = err(
             "id: a\nprotocol: rws\nrws: rw6\nport: 80\ncredentials: {env: X}\npassword: hunter2\n",
         );

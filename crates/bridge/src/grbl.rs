@@ -518,7 +518,15 @@ impl GrblController {
         let done = |what: &str| Ok(format!("{id}: {what}"));
         let r = match command.command {
             MachineCommand::COMMAND_HOLD => client.hold().await.map(|_| "feed hold (!) sent"),
-            MachineCommand::COMMAND_RESUME => client.resume().await.map(|_| "cycle start (~) sent"),
+            MachineCommand::COMMAND_RESUME => {
+                // GRBL drops a `~` while the hold still decelerates (`Hold:1`): wait for
+                // `Hold:0`, send it, and answer from the state the controller reports after.
+                let timeout = Duration::from_secs_f64(self.cfg.resume_timeout_s);
+                return match client.cycle_start_confirmed(timeout).await {
+                    Ok(resumed) => Ok(format!("{id}: {resumed}")),
+                    Err(e) => Err(format!("{id}: resume: {e}")),
+                };
+            }
             MachineCommand::COMMAND_ABORT => {
                 self.abort_requested.store(true, Ordering::SeqCst);
                 return match client.abort().await {

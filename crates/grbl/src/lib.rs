@@ -11,10 +11,13 @@
 //! - [`resume_point`]: the line to resume from after a safe stop flushed the planner.
 //! - [`transport`]: TCP, serial, pty behind one trait.
 //! - [`stream`]: the streaming client ([`stream::GrblClient`]).
+//! - [`cycle_start`]: resume from a feed hold: wait for `Hold:0`, send `~`, confirm it was
+//!   taken.
 //! - [`sim`]: the simulator.
 
 #![warn(missing_docs)]
 
+pub mod cycle_start;
 pub mod firmware;
 pub mod program;
 pub mod protocol;

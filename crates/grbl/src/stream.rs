@@ -840,7 +840,9 @@ impl GrblClient {
         self.realtime(&[Realtime::FeedHold]).await
     }
 
-    /// Cycle start / resume (`~`).
+    /// Cycle start / resume (`~`), written at once. GRBL drops it while a feed hold is still
+    /// decelerating (`Hold:1`); [`GrblClient::cycle_start_confirmed`] waits for the hold to
+    /// complete and confirms the resume was taken.
     pub async fn resume(&self) -> Result<(), ClientError> {
         self.realtime(&[Realtime::CycleStart]).await
     }

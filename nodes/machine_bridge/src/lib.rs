@@ -15,7 +15,9 @@
 //! - Takes `MachineCommand`s (hold, resume, abort, overrides) on `command_topic` and in the
 //!   `machine_command` service (`cell_msgs/srv/SendMachineCommand`), and acts on them at once:
 //!   a GRBL feed hold is one real-time byte written before anything else the link has queued,
-//!   so it lands well within one status cycle.
+//!   so it lands well within one status cycle. Commands run in the order they came, off the
+//!   node's loop (abort beside them, at once); a GRBL resume waits for the hold to complete
+//!   (`Hold:0`) before it sends `~` and answers from the state the controller reports after it.
 //! - With `program_topic` set, runs every `MachineProgram` published there (the emitter's
 //!   output), one at a time per controller.
 //!
@@ -37,6 +39,7 @@ use cell_msgs::{
 };
 use cell_runtime::action::GoalEndStatus;
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
+use cell_runtime::service::RequestId;
 use cell_runtime::views::MachineViews;
 use cell_runtime::{CellNode, MachineStatusLogger, NodeParamError, QosPreset};
 use serde::{Deserialize, Serialize};
@@ -269,6 +272,7 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
         p.status_rate_hz
     );
 
+    let mut command_queue = CommandQueue::start(controllers.clone());
     let mut status_tick = tokio::time::interval(Duration::from_secs_f64(1.0 / p.status_rate_hz));
     status_tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     let mut rerun_logger = MachineStatusLogger::default();
@@ -295,15 +299,22 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
             }
             received = commands.recv() => {
                 let Some(r) = received else { anyhow::bail!("{}: the subscription ended", p.command_topic) };
-                let (ok, message) = act(&controllers, &r.message).await;
-                if ok { tracing::info!("{message}") } else { tracing::warn!("{message}") }
-                node.rerun().log_text("/machine/log", &message);
+                command_queue.push(None, r.message);
             }
             (id, request) = command_server.receive() => {
-                let (success, message) = act(&controllers, &request.command).await;
+                command_queue.push(Some(id), request.command);
+            }
+            Some(done) = command_queue.done.recv() => {
+                let CommandDone { request, success, message } = done;
                 node.rerun().log_text("/machine/log", &message);
-                if let Err(e) = command_server.respond(id, SendMachineCommandResponse { success, message }).await {
-                    tracing::warn!("{e:#}");
+                match request {
+                    Some(id) => {
+                        if let Err(e) = command_server.respond(id, SendMachineCommandResponse { success, message }).await {
+                            tracing::warn!("{e:#}");
+                        }
+                    }
+                    None if success => tracing::info!("{message}"),
+                    None => tracing::warn!("{message}"),
                 }
             }
             served = &mut goal_server, if serving => {
@@ -421,6 +432,67 @@ fn report(node: &CellNode, job_id: &str, outcome: &RunOutcome) {
         tracing::warn!("{line}");
     }
     node.rerun().log_text("/machine/log", &line);
+}
+
+/// A command's answer, for the service's caller (`request`) or the log (from the topic).
+struct CommandDone {
+    request: Option<RequestId>,
+    success: bool,
+    message: String,
+}
+
+/// Commands run off the node's loop, so a slow one (a resume waits for the feed hold to
+/// complete) holds up neither the status nor the service. They run one after another in the
+/// order they came (a hold then a resume stays in that order), except abort, which runs at
+/// once beside them: an e-stop waits for nothing.
+struct CommandQueue {
+    controllers: Arc<Vec<Controller>>,
+    in_order: mpsc::UnboundedSender<(Option<RequestId>, MachineCommand)>,
+    done_tx: mpsc::UnboundedSender<CommandDone>,
+    done: mpsc::UnboundedReceiver<CommandDone>,
+}
+
+impl CommandQueue {
+    fn start(controllers: Arc<Vec<Controller>>) -> CommandQueue {
+        let (in_order, mut queued) = mpsc::unbounded_channel();
+        let (done_tx, done) = mpsc::unbounded_channel();
+        let (worker_controllers, worker_done) = (controllers.clone(), done_tx.clone());
+        tokio::spawn(async move {
+            while let Some((request, command)) = queued.recv().await {
+                let (success, message) = act(&worker_controllers, &command).await;
+                let answer = CommandDone {
+                    request,
+                    success,
+                    message,
+                };
+                if worker_done.send(answer).is_err() {
+                    return;
+                }
+            }
+        });
+        CommandQueue {
+            controllers,
+            in_order,
+            done_tx,
+            done,
+        }
+    }
+
+    fn push(&self, request: Option<RequestId>, command: MachineCommand) {
+        if command.command == MachineCommand::COMMAND_ABORT {
+            let (controllers, done) = (self.controllers.clone(), self.done_tx.clone());
+            tokio::spawn(async move {
+                let (success, message) = act(&controllers, &command).await;
+                let _ = done.send(CommandDone {
+                    request,
+                    success,
+                    message,
+                });
+            });
+        } else {
+            let _ = self.in_order.send((request, command));
+        }
+    }
 }
 
 /// Acts on a command for the controllers it addresses; (all took it, what each said).

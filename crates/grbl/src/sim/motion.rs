@@ -109,8 +109,11 @@ impl Machine {
                 self.finish_head();
             }
             if decel {
+                // The hold completes when the speed reaches zero, or when the planner runs out
+                // of moves first (GRBL's cycle stop in a hold: `Hold:0` with nothing queued).
+                let out_of_moves = !self.queue.iter().any(|e| matches!(e, Entry::Motion(_)));
                 if let Some((t0, v0)) = self.hold {
-                    if t >= t0 + v0 / a - 1e-12 {
+                    if t >= t0 + v0 / a - 1e-12 || out_of_moves {
                         self.hold_stopped();
                     }
                 }

@@ -23,6 +23,9 @@ impl Machine {
             }
             Realtime::FeedHold => self.feed_hold(),
             Realtime::CycleStart => {
+                // Taken only once the hold is complete (`Hold:0`); during the deceleration it
+                // is dropped, as GRBL 1.1h, grblHAL and FluidNC all do (see
+                // `crate::cycle_start`), whichever flavour the simulator speaks.
                 if self.hold_complete && matches!(self.state, MachineState::Hold(_)) {
                     self.hold = None;
                     self.hold_complete = false;
