@@ -8,6 +8,8 @@
 # BUILD_DIR: plain CMake (Ninja) build in BUILD_DIR/build, installed into BUILD_DIR/install;
 # redone only when a file of msgs/ that the package reads (package.xml, CMakeLists.txt,
 # msg/ srv/ action/), this script or jazzy_wheels.cmake changed (stamp BUILD_DIR/sources.sha256).
+# Into the same prefix goes a stand-in for tf2_msgs, which has no wheel (tf2_msgs/ here, with
+# msgs/std/tf2_msgs/msg/TFMessage.msg copied in; built in BUILD_DIR/tf2_msgs-build).
 # Then writes the run-time environment of the built package:
 #   BUILD_DIR/jazzy.env   KEY=VALUE lines (read by cell_testkit::jazzy_workspace)
 #   BUILD_DIR/setup.sh    the same as `export` lines: `. BUILD_DIR/setup.sh`, then python3 has
@@ -55,29 +57,42 @@ fi
 sources_hash() {
   (
     cd "$msgs"
-    printf '%s\n' package.xml CMakeLists.txt msg/* srv/* action/* | LC_ALL=C sort | xargs sha256sum
-    sha256sum "$here/jazzy_wheels.cmake" "$here/build_msgs.sh" | awk '{print $1}'
+    printf '%s\n' package.xml CMakeLists.txt msg/* srv/* action/* std/tf2_msgs/msg/TFMessage.msg |
+      LC_ALL=C sort | xargs sha256sum
+    sha256sum "$here/jazzy_wheels.cmake" "$here/build_msgs.sh" "$here"/tf2_msgs/* | awk '{print $1}'
     cat "$venv/requirements.installed"
   ) | sha256sum | awk '{print $1}'
 }
 want=$(sources_hash)
 install=$build/install
 if [ "$(cat "$build/sources.sha256" 2>/dev/null)" != "$want" ] || [ ! -d "$install/share/cell_msgs" ]; then
-  say "building cell_msgs into $install"
+  say "building cell_msgs and the tf2_msgs stand-in into $install"
   SECONDS=0
   rm -f "$build/sources.sha256"
   # Quirk 5: typesupport discovery at configure time reads AMENT_PREFIX_PATH.
   export AMENT_PREFIX_PATH=$venv CMAKE_PREFIX_PATH=$venv PATH=$venv/bin:$PATH
-  step "$build/configure.log" cmake -S "$msgs" -B "$build/build" -G Ninja \
-    -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF \
-    -DCMAKE_INSTALL_PREFIX="$install" \
-    -DPython3_EXECUTABLE="$python" \
-    -DCMAKE_PROJECT_INCLUDE="$here/jazzy_wheels.cmake"
-  step "$build/build.log" cmake --build "$build/build"
+  # Configures and builds the package in $1 in the build folder $2 (logs $2.*.log).
+  build_package() {
+    step "$2.configure.log" cmake -S "$1" -B "$2" -G Ninja \
+      -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF \
+      -DCMAKE_INSTALL_PREFIX="$install" \
+      -DPython3_EXECUTABLE="$python" \
+      -DCMAKE_PROJECT_INCLUDE="$here/jazzy_wheels.cmake"
+    step "$2.build.log" cmake --build "$2"
+  }
+  build_package "$msgs" "$build/build"
+  # tf2_msgs: no wheel on PyPI; the stand-in's sources, with the vendored stock TFMessage.msg.
+  tf2_src=$build/tf2_msgs-src
+  rm -rf "$tf2_src"
+  mkdir -p "$tf2_src/msg"
+  cp "$here/tf2_msgs/package.xml" "$here/tf2_msgs/CMakeLists.txt" "$tf2_src/"
+  cp "$msgs/std/tf2_msgs/msg/TFMessage.msg" "$tf2_src/msg/"
+  build_package "$tf2_src" "$build/tf2_msgs-build"
   rm -rf "$install"
   step "$build/install.log" cmake --install "$build/build"
+  step "$build/tf2_msgs-install.log" cmake --install "$build/tf2_msgs-build"
   echo "$want" >"$build/sources.sha256"
-  say "cell_msgs built in ${SECONDS}s"
+  say "cell_msgs and tf2_msgs built in ${SECONDS}s"
 fi
 
 # 3. The run-time environment (quirk 5): the package's and the venv's Python modules and

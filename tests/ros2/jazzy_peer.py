@@ -18,6 +18,19 @@ outcomes. The checks, in order (CHECKS below):
   execute     execute_program on the GRBL simulator: feedback, hold and resume through the
               send_machine_command service, result; then a canceled goal
   topics      one decoded sample of every cell topic (subscribed before the jobs ran)
+  views       the standard-type views of the jobs' toolpaths and heat maps, with the stock
+              types: <toolpath>/path (nav_msgs/Path) and <toolpath>/markers
+              (visualization_msgs/MarkerArray) beside the Toolpath of the same stamp,
+              <heat map>/image (sensor_msgs/Image) beside the HeatMap of the same stamp
+  machine_views  the bridge's views after the programs ran: joint_states (sensor_msgs/JointState)
+              and /tf (tf2_msgs/TFMessage) beside the MachineStatus of the same stamp,
+              /tf_static, /diagnostics (diagnostic_msgs/DiagnosticArray)
+  sim_time    the peer is the time source: it publishes /clock (rosgraph_msgs/Clock) and a
+              Toolpath to an emitter started with use_sim_time:=true (namespace --sim-ns),
+              whose MachineProgram is stamped with the peer's clock
+  bag_clock   the replayer is the time source: /clock while it plays a bag (it waits for the
+              peer's subscriber on <sim-ns>/bag_chatter)
+  rosout      the log lines of every cell node on /rosout (rcl_interfaces/Log)
   type_hash   the RIHS01 type hash every cell endpoint announces, beside the built package's
 """
 
@@ -29,6 +42,7 @@ import sys
 import threading
 import time
 
+import numpy
 import rclpy
 from action_msgs.msg import GoalStatus
 from rclpy.action import ActionClient
@@ -50,7 +64,15 @@ from cell_msgs.msg import (
     ToolpathSegment,
 )
 from cell_msgs.srv import EmitProgram, SendMachineCommand
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point
+from nav_msgs.msg import Path
+from rcl_interfaces.msg import Log
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Image, JointState
+from std_msgs.msg import String
+from tf2_msgs.msg import TFMessage  # the stand-in build_msgs.sh builds (no wheel on PyPI)
+from visualization_msgs.msg import Marker, MarkerArray
 
 STATUS_NAMES = {
     GoalStatus.STATUS_UNKNOWN: "UNKNOWN",
@@ -96,6 +118,43 @@ TOPICS = [
     ("sheet_heat", HeatMap, STREAM_QOS),
     ("machine_status", MachineStatus, STATUS_QOS),
 ]
+
+# A ROS 2 time source (rclcpp's ClockQoS), tf2's static broadcaster and rcl's /rosout.
+CLOCK_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.BEST_EFFORT,
+    durability=DurabilityPolicy.VOLATILE,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+)
+TF_STATIC_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=16,
+)
+ROSOUT_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1000,
+)
+
+TOOLPATH_TOPICS = ["toolpath", "sheet_toolpath", "waam_toolpath"]
+HEAT_TOPICS = ["exposure", "exposure_matrix", "sheet_heat"]
+
+# The standard-type views (crates/runtime/src/views.rs); relative names are in the namespace.
+VIEWS = (
+    [(f"{t}/path", Path, PLAN_QOS) for t in TOOLPATH_TOPICS]
+    + [(f"{t}/markers", MarkerArray, PLAN_QOS) for t in TOOLPATH_TOPICS]
+    + [(f"{t}/image", Image, STATUS_QOS) for t in HEAT_TOPICS]
+    + [
+        ("joint_states", JointState, STATUS_QOS),
+        ("/tf", TFMessage, STATUS_QOS),
+        ("/tf_static", TFMessage, TF_STATIC_QOS),
+        ("/diagnostics", DiagnosticArray, STATUS_QOS),
+        ("/rosout", Log, ROSOUT_QOS),
+    ]
+)
 
 NODES = ["planner", "sequencer", "slicer", "emitter", "machine_bridge"]
 ACTIONS = ["plan_hotwire", "sequence_sheet", "slice", "execute_program"]
@@ -206,8 +265,12 @@ class Peer:
         self.samples = {}
         self.lock = threading.Lock()
         self.subscriptions = []
-        for topic, msg_type, qos in TOPICS:
-            name = f"{self.ns}/{topic}"
+        self.sim_ns = args.sim_ns.rstrip("/")
+        self.started = time.time()
+        for topic, msg_type, qos in TOPICS + VIEWS + [
+            (f"{self.sim_ns}/machine_program", MachineProgram, PLAN_QOS)
+        ]:
+            name = self.name(topic)
             self.subscriptions.append(
                 self.node.create_subscription(
                     msg_type, name, lambda msg, name=name: self._sample(name, msg), qos
@@ -236,7 +299,11 @@ class Peer:
         return client
 
     def name(self, relative):
-        return f"{self.ns}/{relative}"
+        return relative if relative.startswith("/") else f"{self.ns}/{relative}"
+
+    def received(self, topic):
+        with self.lock:
+            return list(self.samples.get(self.name(topic), []))
 
     def repo_file(self, relative):
         return os.path.join(self.args.repo, relative)
@@ -549,14 +616,368 @@ class Peer:
             except TimeoutError as e:
                 emit("topics", topic=name, type=_type_name(msg_type), count=0, error=str(e))
 
+    # -- standard-type views -------------------------------------------------------------------
+
+    def _by_stamp(self, topic, stamp, stamp_of=lambda m: m.header.stamp):
+        """The last sample on `topic` stamped `stamp`."""
+        return next((m for m in reversed(self.received(topic)) if _same_time(stamp_of(m), stamp)), None)
+
+    def _viewed(self, view_topic, source_topic, stamp_of):
+        """The last view on `view_topic` with a source sample of the same stamp: (view, source)."""
+
+        def pair():
+            for view in reversed(self.received(view_topic)):
+                source = self._by_stamp(source_topic, stamp_of(view))
+                if source is not None:
+                    return view, source
+            return None
+
+        return self.wait.until(pair, f"a view on {self.name(view_topic)} of a sample on {source_topic}", timeout=10)
+
+    def check_views(self):
+        for topic in TOOLPATH_TOPICS:
+            path, tp = self._viewed(f"{topic}/path", topic, lambda p: p.header.stamp)
+            points = [p for s in tp.segments for p in s.points]
+            poses = [p.pose.position for p in path.poses]
+            diffs = [
+                max(abs(q.x - p.x / 1000.0), abs(q.y - p.y / 1000.0), abs(q.z - p.z / 1000.0))
+                for q, p in zip(poses, points)
+            ]
+            emit(
+                "views",
+                view="path",
+                topic=self.name(f"{topic}/path"),
+                count=len(self.received(f"{topic}/path")),
+                job_id=tp.job_id,
+                frame_id=path.header.frame_id,
+                toolpath_frame_id=tp.header.frame_id,
+                pose_frame_ids=sorted({p.header.frame_id for p in path.poses}),
+                poses=len(poses),
+                points=len(points),
+                max_abs_diff_m=max(diffs, default=None),
+                equal_poses=sum(d == 0.0 for d in diffs),
+            )
+            array, tp = self._viewed(
+                f"{topic}/markers", topic, lambda a: a.markers[0].header.stamp if a.markers else None
+            )
+            # What the toolpath asks for, per (kind, layer, secondary): line pairs and the first
+            # point drawn (a segment of fewer than two points draws nothing).
+            groups = {}
+            for s in tp.segments:
+                for secondary, pts in ((False, s.points), (True, s.secondary_points)):
+                    if len(pts) < 2:
+                        continue
+                    g = groups.setdefault(
+                        (s.kind, s.layer, secondary), {"pairs": 0, "first_mm": [pts[0].x, pts[0].y, pts[0].z]}
+                    )
+                    g["pairs"] += len(pts) - 1
+            emit(
+                "views",
+                view="markers",
+                topic=self.name(f"{topic}/markers"),
+                count=len(self.received(f"{topic}/markers")),
+                job_id=tp.job_id,
+                toolpath_frame_id=tp.header.frame_id,
+                first_action=array.markers[0].action,
+                markers=[
+                    {
+                        "ns": m.ns,
+                        "id": m.id,
+                        "type": m.type,
+                        "action": m.action,
+                        "frame_id": m.header.frame_id,
+                        "points": len(m.points),
+                        "first_m": [m.points[0].x, m.points[0].y, m.points[0].z] if m.points else None,
+                        "color": [m.color.r, m.color.g, m.color.b, m.color.a],
+                        "scale_x": m.scale.x,
+                    }
+                    for m in array.markers[1:]
+                ],
+                groups=[{"kind": k, "layer": layer, "secondary": sec, **g} for (k, layer, sec), g in groups.items()],
+            )
+        for topic in HEAT_TOPICS:
+            image, heat = self._viewed(f"{topic}/image", topic, lambda i: i.header.stamp)
+            images = self.received(f"{topic}/image")
+            matched = equal = 0
+            for i in images:
+                h = self._by_stamp(topic, i.header.stamp)
+                if h is None:
+                    continue
+                matched += 1
+                # The image's bytes as little-endian float32, bit for bit against the HeatMap's.
+                got = numpy.frombuffer(bytes(i.data), dtype="<u4")
+                want = numpy.asarray(h.data, dtype=numpy.float32).view(numpy.uint32)
+                equal += int((i.width, i.height) == (h.width, h.height) and numpy.array_equal(got, want))
+            emit(
+                "views",
+                view="image",
+                topic=self.name(f"{topic}/image"),
+                count=len(images),
+                heat_maps=len(self.received(topic)),
+                matched=matched,
+                equal=equal,
+                encodings=sorted({i.encoding for i in images}),
+                is_bigendian=sorted({i.is_bigendian for i in images}),
+                steps_ok=sum(i.step == 4 * i.width and len(i.data) == i.step * i.height for i in images),
+                width=image.width,
+                height=image.height,
+                step=image.step,
+                frame_id=image.header.frame_id,
+                heat_width=heat.width,
+                heat_height=heat.height,
+                heat_frame_id=heat.header.frame_id,
+            )
+
+    def check_machine_views(self):
+        status_topic = "machine_status"
+
+        def moved(status):
+            return any(p != 0.0 for p in status.axis_positions)
+
+        def joint_state_of_a_move():
+            for js in reversed(self.received("joint_states")):
+                s = self._by_stamp(status_topic, js.header.stamp)
+                if s is not None and moved(s):
+                    return js, s
+            return None
+
+        js, status = self.wait.until(joint_state_of_a_move, "a joint state of a moved machine", timeout=10)
+        emit(
+            "machine_views",
+            view="joint_states",
+            count=len(self.received("joint_states")),
+            frame_id=js.header.frame_id,
+            name=list(js.name),
+            position=list(js.position),
+            velocity=len(js.velocity),
+            effort=len(js.effort),
+            machine_id=status.machine_id,
+            axis_names=list(status.axis_names),
+            axis_positions=list(status.axis_positions),
+            max_abs_diff_m=max(abs(q - p / 1000.0) for q, p in zip(js.position, status.axis_positions)),
+        )
+
+        def tool_frame_of_a_move():
+            for message in reversed(self.received("/tf")):
+                for t in message.transforms:
+                    s = self._by_stamp(status_topic, t.header.stamp)
+                    if s is not None and moved(s):
+                        return t, s
+            return None
+
+        t, status = self.wait.until(tool_frame_of_a_move, "a tool frame of a moved machine", timeout=10)
+        axis = dict(zip(status.axis_names, status.axis_positions))
+        tr, rot = t.transform.translation, t.transform.rotation
+        emit(
+            "machine_views",
+            view="tf",
+            count=len(self.received("/tf")),
+            parent=t.header.frame_id,
+            child=t.child_frame_id,
+            translation=[tr.x, tr.y, tr.z],
+            rotation=[rot.x, rot.y, rot.z, rot.w],
+            axis_positions=list(status.axis_positions),
+            max_abs_diff_m=max(
+                abs(tr.x - axis.get("X", 0.0) / 1000.0),
+                abs(tr.y - axis.get("Y", 0.0) / 1000.0),
+                abs(tr.z - axis.get("Z", 0.0) / 1000.0),
+            ),
+        )
+        pairs = sorted(
+            {(t.header.frame_id, t.child_frame_id) for m in self.received("/tf_static") for t in m.transforms}
+        )
+        emit("machine_views", view="tf_static", count=len(self.received("/tf_static")), frames=pairs)
+
+        def latest_diagnostics():
+            # The last array that a later status follows: the status of its own tick, sent
+            # before it, has surely arrived.
+            statuses = self.received(status_topic)
+            newest = _ns(statuses[-1].header.stamp) if statuses else 0
+            arrays = [a for a in self.received("/diagnostics") if a.status and _ns(a.header.stamp) < newest]
+            return arrays[-1] if arrays else None
+
+        array = self.wait.until(latest_diagnostics, "a diagnostic array", timeout=10)
+        # The status the bridge reported last before it: the same tick's, or the one before.
+        before = [s for s in self.received(status_topic) if _ns(s.header.stamp) <= _ns(array.header.stamp)]
+        status = before[-1] if before else None
+        emit(
+            "machine_views",
+            view="diagnostics",
+            count=len(self.received("/diagnostics")),
+            stamp_ns=_ns(array.header.stamp),
+            status=[
+                {
+                    "name": d.name,
+                    "level": _byte(d.level),
+                    "message": d.message,
+                    "hardware_id": d.hardware_id,
+                    "values": {kv.key: kv.value for kv in d.values},
+                }
+                for d in array.status
+            ],
+            last_status=None
+            if status is None
+            else {
+                "stamp_ns": _ns(status.header.stamp),
+                "state": status.state,
+                "axis_names": list(status.axis_names),
+                "axis_positions": list(status.axis_positions),
+            },
+        )
+
+    # -- time sources ----------------------------------------------------------------------------
+
+    def check_sim_time(self):
+        """The peer as the time source of an emitter on simulated time: a clock that starts at
+        --sim-time-s and advances 0.1 s a tick, every 0.1 s; a Toolpath; the program's stamp."""
+        clock = self.node.create_publisher(Clock, "/clock", CLOCK_QOS)
+        toolpaths = self.node.create_publisher(Toolpath, f"{self.sim_ns}/toolpath", PLAN_QOS)
+        try:
+            # The emitter's /clock reader (the cell nodes' other /clock readers are ros2-client's,
+            # of builtin_interfaces/Time: they never match) and its toolpath reader.
+            self.wait.until(lambda: clock.get_subscription_count() > 0, "a /clock reader on sim time")
+            self.wait.until(lambda: toolpaths.get_subscription_count() > 0, f"a reader of {self.sim_ns}/toolpath")
+            ticks = []
+            stop = threading.Event()
+
+            def tick():
+                t = int(self.args.sim_time_s * 1e9)
+                while not stop.is_set():
+                    ticks.append(t)
+                    clock.publish(Clock(clock=_time(t)))
+                    t += 100_000_000
+                    stop.wait(0.1)
+
+            ticker = threading.Thread(target=tick, daemon=True)
+            ticker.start()
+            # Best effort: until the emitter's reader has matched the peer's writer, ticks are
+            # lost and its time is still zero (as rclpy's would be), so its program says 0.
+            # Send toolpaths until a program carries a clock time; each is reported.
+            attempts = []
+            try:
+                for attempt in range(1, 8):
+                    job_id = f"jazzy-sim-{attempt}"
+                    toolpaths.publish(wing_panel(job_id))
+
+                    def program(job_id=job_id):
+                        return next((p for p in self.received(f"{self.sim_ns}/machine_program") if p.job_id == job_id), None)
+
+                    p = self.wait.until(program, f"the program of {job_id}", timeout=self.args.timeout)
+                    attempts.append({"job_id": job_id, "stamp_ns": _ns(p.header.stamp), "ticks_sent": len(ticks)})
+                    if _ns(p.header.stamp) != 0:
+                        break
+            finally:
+                stop.set()
+                ticker.join()
+            stamp = attempts[-1]["stamp_ns"]
+            emit(
+                "sim_time",
+                attempts=attempts,
+                stamp_ns=stamp,
+                first_tick_ns=ticks[0],
+                last_tick_ns=ticks[-1],
+                ticks=len(ticks),
+                stamp_is_a_tick=stamp in ticks,
+                wall_ns=time.time_ns(),
+            )
+        finally:
+            self.node.destroy_publisher(toolpaths)
+            self.node.destroy_publisher(clock)
+
+    def check_bag_clock(self):
+        """The cell's replayer as the time source: /clock while it plays a bag, which it starts
+        once this peer subscribes to the bag's topic <sim-ns>/bag_chatter."""
+        ticks, chatter = [], []
+        lock = threading.Lock()
+
+        def on_clock(m):
+            with lock:
+                ticks.append(_ns(m.clock))
+
+        def on_chatter(m):
+            with lock:
+                chatter.append((m.data, ticks[-1] if ticks else None))
+
+        subs = [
+            self.node.create_subscription(Clock, "/clock", on_clock, CLOCK_QOS),
+            self.node.create_subscription(String, f"{self.sim_ns}/bag_chatter", on_chatter, STATUS_QOS),
+        ]
+        try:
+
+            def ended():
+                with lock:
+                    return any(text == "end" for text, _ in chatter)
+
+            self.wait.until(ended, "the bag's last message", timeout=3 * self.args.timeout)
+            # The ticks up to the end of the bag (the replayer keeps its clock while it lingers).
+            self.wait.until(lambda: len(ticks) > 0, "a /clock tick")
+            with lock:
+                seen, texts = list(ticks), list(chatter)
+            emit(
+                "bag_clock",
+                ticks=len(seen),
+                first_ns=seen[0],
+                last_ns=seen[-1],
+                monotonic=all(a <= b for a, b in zip(seen, seen[1:])),
+                chatter=[text for text, _ in texts],
+                clock_at_chatter_ns=[at for _, at in texts],
+            )
+        finally:
+            for sub in subs:
+                self.node.destroy_subscription(sub)
+
+    # -- /rosout ---------------------------------------------------------------------------------
+
+    def check_rosout(self):
+        def every_node_logged():
+            names = {line.name for line in self.received("/rosout")}
+            return all(n in names for n in NODES)
+
+        try:
+            self.wait.until(every_node_logged, "a /rosout line of every cell node", timeout=10)
+        except TimeoutError:
+            pass  # what was seen is reported; the test names who is missing
+        lines = self.received("/rosout")
+        by_name = {}
+        for line in lines:
+            entry = by_name.setdefault(
+                line.name,
+                {"count": 0, "levels": set(), "min_stamp_ns": None, "max_stamp_ns": None, "sample": None, "worst": None},
+            )
+            entry["count"] += 1
+            entry["levels"].add(line.level)
+            t = _ns(line.stamp)
+            entry["min_stamp_ns"] = t if entry["min_stamp_ns"] is None else min(t, entry["min_stamp_ns"])
+            entry["max_stamp_ns"] = t if entry["max_stamp_ns"] is None else max(t, entry["max_stamp_ns"])
+            seen = {"level": line.level, "msg": line.msg, "function": line.function, "line": line.line}
+            if entry["sample"] is None or line.level == Log.INFO:
+                entry["sample"] = seen
+            if entry["worst"] is None or line.level > entry["worst"]["level"]:
+                entry["worst"] = seen
+        for entry in by_name.values():
+            entry["levels"] = sorted(entry["levels"])
+        emit(
+            "rosout",
+            lines=len(lines),
+            by_name=by_name,
+            # The emitter's INFO line for the program it made of the peer's toolpath.
+            emitter_topic_lines=[
+                {"name": line.name, "level": line.level, "msg": line.msg}
+                for line in lines
+                if "jazzy-topic" in line.msg and line.name == "emitter"
+            ][:3],
+            peer_started_ns=int(self.started * 1e9),
+            now_ns=time.time_ns(),
+        )
+
     def check_type_hash(self):
-        """Every endpoint of a cell node on a topic of the namespace, action topics and service
-        request/reply topics included (raw DDS names: rt/, rq/, rr/)."""
+        """Every endpoint of a cell node (namespaces --ns and --sim-ns) on any topic: the
+        namespace's topics, action topics and service request/reply topics (raw DDS names: rt/,
+        rq/, rr/), and the global ones (/tf, /tf_static, /diagnostics, /clock, /rosout,
+        /parameter_events)."""
         built = _built_hashes(self.args.install)
-        prefixes = tuple(f"{p}{self.ns[1:]}/" for p in ("rt/", "rq/", "rr/"))
+        cell = {self.ns, self.sim_ns}
         for name, _ in sorted(self.node.get_topic_names_and_types(no_demangle=True)):
-            if not name.startswith(prefixes):
-                continue
             endpoints = [
                 ("publisher", i) for i in self.node.get_publishers_info_by_topic(name, no_mangle=True)
             ] + [
@@ -564,7 +985,7 @@ class Peer:
                 for i in self.node.get_subscriptions_info_by_topic(name, no_mangle=True)
             ]
             for kind, info in endpoints:
-                if info.node_name == self.node.get_name():
+                if info.node_name == self.node.get_name() or info.node_namespace.rstrip("/") not in cell:
                     continue
                 type_name = _ros_type_name(info.topic_type)
                 # A service's request and reply endpoints may carry the service's own hash.
@@ -587,6 +1008,26 @@ def _ros_type_name(dds_or_ros):
         package, kind, _, name = dds_or_ros.split("::")
         return f"{package}/{kind}/{name.rstrip('_')}"
     return dds_or_ros
+
+
+def _ns(t):
+    """builtin_interfaces/Time in nanoseconds."""
+    return t.sec * 1_000_000_000 + t.nanosec
+
+
+def _time(ns):
+    from builtin_interfaces.msg import Time
+
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def _same_time(a, b):
+    return a is not None and b is not None and (a.sec, a.nanosec) == (b.sec, b.nanosec)
+
+
+def _byte(value):
+    """A `byte` field (rclpy gives bytes of length 1) as an int."""
+    return value[0] if isinstance(value, (bytes, bytearray)) else int(value)
 
 
 def _action_type(name):
@@ -654,7 +1095,23 @@ def _built_hashes(install):
     return hashes
 
 
-CHECKS = ["graph", "params", "emit", "topic_emit", "plan", "sheet", "slice", "execute", "topics", "type_hash"]
+CHECKS = [
+    "graph",
+    "params",
+    "emit",
+    "topic_emit",
+    "plan",
+    "sheet",
+    "slice",
+    "execute",
+    "topics",
+    "views",
+    "machine_views",
+    "sim_time",
+    "bag_clock",
+    "rosout",
+    "type_hash",
+]
 
 
 def main():
@@ -664,6 +1121,8 @@ def main():
     parser.add_argument("--install", required=True, help="cell_msgs' install prefix (type hashes)")
     parser.add_argument("--timeout", type=float, default=30.0, help="discovery and answer bound [s]")
     parser.add_argument("--slice-cancel-layer-mm", type=float, default=0.2)
+    parser.add_argument("--sim-ns", default="/sim", help="namespace of the emitter on simulated time")
+    parser.add_argument("--sim-time-s", type=float, default=1_000_000_000.0, help="the peer's /clock start [s]")
     parser.add_argument("--only", nargs="*", choices=CHECKS, help="run only these checks")
     args = parser.parse_args()
     rclpy.init()

@@ -3,11 +3,11 @@
 //! The cell's own messages are in millimetres and custom types; these pure functions turn them
 //! into the standard types those tools draw, in SI units (metres, radians) as REP-103 asks:
 //!
-//! - a `Toolpath` → `nav_msgs/Path` ([`toolpath_path`]) and `visualization_msgs/MarkerArray`
-//!   ([`toolpath_markers`]: one line-list marker per segment kind and layer, coloured by kind);
-//! - a `HeatMap` → `sensor_msgs/Image` in `32FC1` ([`heat_map_image`]);
-//! - `MachineStatus` → `sensor_msgs/JointState` ([`joint_state`]), the tool frame as a tf2
-//!   transform ([`tool_transform`]) and `diagnostic_msgs/DiagnosticArray` ([`diagnostics`]).
+//! - a `Toolpath` → `nav_msgs/Path` ([`toolpath_path()`]) and `visualization_msgs/MarkerArray`
+//!   ([`toolpath_markers()`]: one line-list marker per segment kind and layer, coloured by kind);
+//! - a `HeatMap` → `sensor_msgs/Image` in `32FC1` ([`heat_map_image()`]);
+//! - `MachineStatus` → `sensor_msgs/JointState` ([`joint_state()`]), the tool frame as a tf2
+//!   transform ([`tool_transform()`]) and `diagnostic_msgs/DiagnosticArray` ([`diagnostics()`]).
 //!
 //! Frames ([`frames`]): `cell` is the fixed frame; each message keeps its own frame id (e.g.
 //! `sheet`, `hotwire_machine`), attached to `cell` by an identity transform
