@@ -866,14 +866,15 @@ fn rosout(checks: &Checks) {
         l["peer_started_ns"].as_u64().unwrap(),
         l["now_ns"].as_u64().unwrap(),
     );
+    // rcl's logger names: namespace and name joined by dots.
     for node in [
-        "planner",
-        "sequencer",
-        "slicer",
-        "emitter",
-        "machine_bridge",
-        "sim_emitter",
-        "bag_play",
+        "cell.planner",
+        "cell.sequencer",
+        "cell.slicer",
+        "cell.emitter",
+        "cell.machine_bridge",
+        "sim.sim_emitter",
+        "sim.bag_play",
     ] {
         let n = &l["by_name"][node];
         assert!(

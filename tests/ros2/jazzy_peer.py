@@ -929,9 +929,13 @@ class Peer:
     # -- /rosout ---------------------------------------------------------------------------------
 
     def check_rosout(self):
+        # rcl's logger names: namespace and node name joined by dots (/cell/emitter: cell.emitter).
+        prefix = self.ns.strip("/").replace("/", ".")
+        loggers = [f"{prefix}.{n}" if prefix else n for n in NODES]
+
         def every_node_logged():
             names = {line.name for line in self.received("/rosout")}
-            return all(n in names for n in NODES)
+            return all(n in names for n in loggers)
 
         try:
             self.wait.until(every_node_logged, "a /rosout line of every cell node", timeout=10)
@@ -964,7 +968,7 @@ class Peer:
             emitter_topic_lines=[
                 {"name": line.name, "level": line.level, "msg": line.msg}
                 for line in lines
-                if "jazzy-topic" in line.msg and line.name == "emitter"
+                if "jazzy-topic" in line.msg and line.name == loggers[NODES.index("emitter")]
             ][:3],
             peer_started_ns=int(self.started * 1e9),
             now_ns=time.time_ns(),

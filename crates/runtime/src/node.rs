@@ -293,7 +293,7 @@ impl CellNode {
         sealed.store(true, std::sync::atomic::Ordering::Relaxed);
         {
             use ros2_client::dds::RosoutRaw as _;
-            crate::rosout::register(&name, ros_node.rosout_writer());
+            crate::rosout::register(&namespace, &name, ros_node.rosout_writer());
         }
         let spinner = ros_node
             .spinner()

@@ -6,8 +6,9 @@
 //! `tracing` has one global subscriber per process, so the forwarding is a `tracing` layer
 //! ([`RosoutLayer`]) over a process-wide list of the live nodes' rosout writers: each
 //! [`crate::CellNode`] registers its writer when it comes up, and an event goes out once per
-//! live node, under that node's name. Events of the DDS stack itself (`rustdds`,
-//! `ros2_client`) are not forwarded: publishing them would log again.
+//! live node, under that node's logger name as rclcpp writes it (`cell.emitter` for
+//! `/cell/emitter`). Events of the DDS stack itself (`rustdds`, `ros2_client`, also when they
+//! come through the `log` crate) are not forwarded: publishing them would log again.
 
 use std::cell::Cell;
 use std::fmt::Write as _;
@@ -17,6 +18,7 @@ use ros2_client::log::Log;
 use ros2_client::Publisher;
 use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Subscriber};
+use tracing_log::NormalizeEvent as _;
 use tracing_subscriber::layer::{Context, Layer};
 
 type Writer = Option<Publisher<Log>>;
@@ -35,11 +37,23 @@ thread_local! {
     static FORWARDING: Cell<bool> = const { Cell::new(false) };
 }
 
-/// Registers node `name`'s rosout writer; it is dropped from the list when the node goes.
-pub(crate) fn register(name: &str, writer: Arc<Writer>) {
+/// Registers the rosout writer of node `name` in `namespace`; it is dropped from the list when
+/// the node goes.
+pub(crate) fn register(namespace: &str, name: &str, writer: Arc<Writer>) {
     let mut list = writers().lock().unwrap_or_else(|p| p.into_inner());
     list.retain(|(_, w)| w.strong_count() > 0);
-    list.push((name.to_string(), Arc::downgrade(&writer)));
+    list.push((logger_name(namespace, name), Arc::downgrade(&writer)));
+}
+
+/// rcl's logger name of a node: its namespace and name joined by dots (`/cell`, `emitter` →
+/// `cell.emitter`).
+fn logger_name(namespace: &str, name: &str) -> String {
+    namespace
+        .split('/')
+        .filter(|part| !part.is_empty())
+        .chain([name])
+        .collect::<Vec<_>>()
+        .join(".")
 }
 
 /// The layer [`crate::logging::init`] installs (module docs).
@@ -52,6 +66,9 @@ struct Line(String);
 
 impl Visit for Line {
     fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+        if field.name().starts_with("log.") {
+            return; // the `log` crate's metadata, already in the normalised metadata
+        }
         if field.name() == "message" {
             let rest = std::mem::take(&mut self.0);
             let _ = write!(self.0, "{value:?}{rest}");
@@ -61,6 +78,9 @@ impl Visit for Line {
     }
 
     fn record_str(&mut self, field: &Field, value: &str) {
+        if field.name().starts_with("log.") {
+            return;
+        }
         if field.name() == "message" {
             let rest = std::mem::take(&mut self.0);
             self.0 = format!("{value}{rest}");
@@ -72,7 +92,10 @@ impl Visit for Line {
 
 impl<S: Subscriber> Layer<S> for RosoutLayer {
     fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
-        let meta = event.metadata();
+        // Events from the `log` crate (rustdds logs that way) carry their real target, file
+        // and line in fields; normalised, they are filtered like the others.
+        let normalized = event.normalized_metadata();
+        let meta = normalized.as_ref().unwrap_or_else(|| event.metadata());
         let target = meta.target();
         if target.starts_with("rustdds") || target.starts_with("ros2_client") {
             return;
@@ -112,5 +135,17 @@ impl<S: Subscriber> Layer<S> for RosoutLayer {
             }
         }
         FORWARDING.with(|f| f.set(false));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::logger_name;
+
+    #[test]
+    fn logger_names_join_namespace_and_name_with_dots() {
+        assert_eq!(logger_name("/cell", "emitter"), "cell.emitter");
+        assert_eq!(logger_name("/", "planner"), "planner");
+        assert_eq!(logger_name("/a/b/", "n"), "a.b.n");
     }
 }
