@@ -14,7 +14,7 @@ use cell_msgs::{
     EmitProgramRequest, EmitProgramResponse, MachineProgram, PlanHotwireFeedback, PlanHotwireGoal,
     PlanHotwireResult, Toolpath,
 };
-use cell_runtime::{type_hash::ros_type_name, QosPreset};
+use cell_runtime::{graph::ros_type_name, QosPreset};
 use common::{fresh_domain, node, DELIVERY_TIMEOUT};
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 

@@ -24,14 +24,19 @@ pub fn ros_topic_name(dds: &str) -> Option<String> {
     (!rest.contains("/_action/")).then(|| format!("/{rest}"))
 }
 
-/// `cell_msgs::msg::dds_::Toolpath_` → `cell_msgs/msg/Toolpath`.
+/// The ROS 2 name of a DDS type name, the inverse of rosidl's DDS naming:
+/// `cell_msgs::msg::dds_::Toolpath_` → `cell_msgs/msg/Toolpath`. `None` for a name not of that
+/// form (a kind other than msg/srv/action, an empty package or type).
 pub fn ros_type_name(dds: &str) -> Option<String> {
     let mut parts = dds.split("::");
     let (package, kind, dds_, name) = (parts.next()?, parts.next()?, parts.next()?, parts.next()?);
-    if parts.next().is_some() || dds_ != "dds_" {
-        return None;
-    }
-    Some(format!("{package}/{kind}/{}", name.strip_suffix('_')?))
+    let name = name.strip_suffix('_')?;
+    let well_formed = parts.next().is_none()
+        && dds_ == "dds_"
+        && matches!(kind, "msg" | "srv" | "action")
+        && !package.is_empty()
+        && !name.is_empty();
+    well_formed.then(|| format!("{package}/{kind}/{name}"))
 }
 
 impl CellNode {
@@ -91,5 +96,43 @@ mod tests {
             ros_type_name("rmw_dds_common::msg::ParticipantEntitiesInfo"),
             None
         );
+    }
+
+    #[test]
+    fn dds_type_names_map_back_to_ros_names() {
+        let cases = [
+            ("cell_msgs::msg::dds_::Toolpath_", "cell_msgs/msg/Toolpath"),
+            (
+                "cell_msgs::srv::dds_::EmitProgram_Request_",
+                "cell_msgs/srv/EmitProgram_Request",
+            ),
+            (
+                "cell_msgs::action::dds_::PlanHotwire_SendGoal_Response_",
+                "cell_msgs/action/PlanHotwire_SendGoal_Response",
+            ),
+            (
+                "cell_msgs::action::dds_::PlanHotwire_FeedbackMessage_",
+                "cell_msgs/action/PlanHotwire_FeedbackMessage",
+            ),
+        ];
+        for (dds, ros) in cases {
+            assert_eq!(ros_type_name(dds).as_deref(), Some(ros), "{dds}");
+        }
+    }
+
+    #[test]
+    fn names_that_are_not_rosidl_dds_names_map_to_none() {
+        for name in [
+            "",
+            "Toolpath",
+            "cell_msgs::msg::Toolpath_",
+            "cell_msgs::msg::dds_::Toolpath",
+            "cell_msgs::idl::dds_::Toolpath_",
+            "cell_msgs::msg::dds_::_",
+            "a::msg::dds_::B_::C_",
+            "DiscoveredWriterData",
+        ] {
+            assert_eq!(ros_type_name(name), None, "{name:?}");
+        }
     }
 }

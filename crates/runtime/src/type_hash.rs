@@ -12,20 +12,7 @@
 //! services and topics: `pkg/action/Name_SendGoal_Request`, `Name_GetResult_Response`,
 //! `Name_FeedbackMessage`, `action_msgs/srv/CancelGoal_Request`, `action_msgs/msg/GoalStatusArray`.
 
-/// The ROS 2 name (`pkg/msg/Type`) of a DDS type name (`pkg::msg::dds_::Type_`): the inverse of
-/// rosidl's DDS naming. `None` for a name not of that form.
-pub fn ros_type_name(dds_type_name: &str) -> Option<String> {
-    let mut parts = dds_type_name.split("::");
-    let (package, kind, dds, type_name) =
-        (parts.next()?, parts.next()?, parts.next()?, parts.next()?);
-    let type_name = type_name.strip_suffix('_')?;
-    let well_formed = parts.next().is_none()
-        && dds == "dds_"
-        && matches!(kind, "msg" | "srv" | "action")
-        && !package.is_empty()
-        && !type_name.is_empty();
-    well_formed.then(|| format!("{package}/{kind}/{type_name}"))
-}
+use crate::graph::ros_type_name;
 
 /// The USER_DATA announcing the type hash of an endpoint of `dds_type_name`:
 /// `typehash=RIHS01_…;`. Empty (nothing announced, as Jazzy does for a type without a hash) when
@@ -48,44 +35,6 @@ pub fn user_data(dds_type_name: &str) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn dds_type_names_map_back_to_ros_names() {
-        let cases = [
-            ("cell_msgs::msg::dds_::Toolpath_", "cell_msgs/msg/Toolpath"),
-            (
-                "cell_msgs::srv::dds_::EmitProgram_Request_",
-                "cell_msgs/srv/EmitProgram_Request",
-            ),
-            (
-                "cell_msgs::action::dds_::PlanHotwire_SendGoal_Response_",
-                "cell_msgs/action/PlanHotwire_SendGoal_Response",
-            ),
-            (
-                "cell_msgs::action::dds_::PlanHotwire_FeedbackMessage_",
-                "cell_msgs/action/PlanHotwire_FeedbackMessage",
-            ),
-        ];
-        for (dds, ros) in cases {
-            assert_eq!(ros_type_name(dds).as_deref(), Some(ros), "{dds}");
-        }
-    }
-
-    #[test]
-    fn names_that_are_not_rosidl_dds_names_map_to_none() {
-        for name in [
-            "",
-            "Toolpath",
-            "cell_msgs::msg::Toolpath_",
-            "cell_msgs::msg::dds_::Toolpath",
-            "cell_msgs::idl::dds_::Toolpath_",
-            "cell_msgs::msg::dds_::_",
-            "a::msg::dds_::B_::C_",
-            "DiscoveredWriterData",
-        ] {
-            assert_eq!(ros_type_name(name), None, "{name:?}");
-        }
-    }
 
     #[test]
     fn unknown_types_announce_nothing() {
