@@ -681,6 +681,24 @@ fn bad_input_is_refused_naming_the_parameter_or_file() {
         64,
         "rate",
     );
+    check(
+        cell(&["bag", "play", &ok, "--clock", "5000"]),
+        64,
+        "clock_hz: 5000",
+    );
+    check(
+        cell(&[
+            "node",
+            "replayer",
+            "--ros-args",
+            "-p",
+            &format!("bag:={ok}"),
+            "-p",
+            "clock_hz:=-1",
+        ]),
+        64,
+        "clock_hz",
+    );
 
     // An unfinished bag (its writer killed): exit 65 naming the file and saying what to do.
     let mcap = bag.join("ok_0.mcap");
