@@ -10,9 +10,13 @@
 //! - `play` runs the replayer library on a node named `bag_play` with a progress bar: recorded
 //!   timing (×`--rate`), recorded QoS, `--loop`, `--topics`/`--exclude`, `--remap`,
 //!   `--start-offset`, `--paused` (resume with `/bag_play/set_paused`), `--clock [HZ]` (the
-//!   bag's time on `/clock` for `use_sim_time` nodes); Ctrl-C stops cleanly.
+//!   bag's time on `/clock` for `use_sim_time` nodes); Ctrl-C stops cleanly. Machine topics
+//!   (programs, machine commands, `execute_program` goals) are left out, with a line naming
+//!   them, unless `--topics` names one; playing one onto a domain where a machine bridge runs
+//!   needs `--allow-machine-topics` (see [`replayer`]).
 //!
-//! Exit status: 0 done; 64 a bad command line or a path that does not exist; 65 a bag that
+//! Exit status: 0 done; 64 a bad command line, a path that does not exist, or machine topics
+//! refused because a machine bridge runs on the domain; 65 a bag that
 //! cannot be read (truncated, corrupted, unfinished: the message names the file and offset, and
 //! for an unfinished bag says to run `cell bag repair`).
 
@@ -88,6 +92,10 @@ pub struct PlayArgs {
     /// ROS_LOCALHOST_ONLY, else all).
     #[arg(long, value_name = "NETWORK")]
     pub dds_network: Option<String>,
+    /// Play machine topics named in --topics (programs, machine commands, execute_program
+    /// goals) even when a machine bridge runs on the domain: the machine will act on them.
+    #[arg(long)]
+    pub allow_machine_topics: bool,
 }
 
 impl PlayArgs {
@@ -114,6 +122,7 @@ impl PlayArgs {
             wait_for_subscribers_s: self.wait_for_subscribers,
             linger_s: self.linger,
             clock_hz: self.clock.unwrap_or(0.0),
+            allow_machine_topics: self.allow_machine_topics,
             ..defaults
         }
     }
@@ -143,6 +152,15 @@ fn play(args: &PlayArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
+    let left_out = replay.machine_topics_left_out();
+    if !left_out.is_empty() {
+        let names: Vec<&str> = left_out.iter().map(|(t, _)| t.as_str()).collect();
+        eprintln!(
+            "cell bag play: left out machine topics {} (they would drive a machine); name one \
+             with --topics to play it",
+            names.join(", ")
+        );
+    }
     let runtime = match tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

@@ -210,7 +210,13 @@ pub fn flag_for(parameter: JobParameter) -> Option<&'static str> {
         JobParameter::TwistPivotChordFraction => Some("--twist-pivot"),
         JobParameter::LeadInMm => Some("--lead-in"),
         JobParameter::LeadInMaxMm => Some("--lead-in-max"),
-        JobParameter::CurrentA | JobParameter::OffsetMm => None,
+        JobParameter::Particles => Some("--particles"),
+        JobParameter::Iterations => Some("--iterations"),
+        JobParameter::CurrentA
+        | JobParameter::OffsetMm
+        | JobParameter::PathPoints
+        | JobParameter::ControlPoints
+        | JobParameter::RefineIterations => None,
     }
 }
 

@@ -4,8 +4,10 @@
 //!   supervises them (see [`cell_launch`]).
 //! - `cell demo` runs the demo cell from `launch_scripts/demo.launch.yaml` (embedded in the
 //!   binary, so it works from any directory): a hot-wire wing planned, emitted and streamed to
-//!   the GRBL simulator, then a sheet nest sequenced, emitted and run on a GRBL laser simulator;
-//!   the programs, the bag, `cell.rrd` and `bag.rrd` in `demo-out/`.
+//!   the GRBL simulator, then a sheet nest sequenced, emitted and run on a GRBL laser simulator,
+//!   a WAAM part sliced and run on the RWS simulator, and a G-Wing section's first layers
+//!   printed on the Marlin simulator; the programs, the bag, `cell.rrd` and `bag.rrd` in
+//!   `demo-out/`.
 //! - `cell node EXEC [ARGS…]` runs one of the nodes built into `cell`, exactly as its own binary
 //!   would. Launch files fall back to this, so `cargo run -- demo` needs no other binaries.
 //! - `cell hotwire --airfoil NAME|FILE --chord MM --out DIR [--profile NAME]` plans one hot-wire
@@ -38,6 +40,7 @@ pub mod hotwire;
 pub mod machine;
 pub mod rrd;
 pub mod sheet;
+pub mod sim_process;
 pub mod slice;
 pub mod stream;
 pub mod wing;
@@ -92,7 +95,9 @@ enum Command {
     },
     /// Run the demo cell: a hot-wire wing planned, emitted for the 4-axis GRBL cutter and
     /// streamed to the in-repo GRBL simulator, then a sheet nest sequenced and cut on a GRBL
-    /// laser simulator, with a summary table at the end. Writes the
+    /// laser simulator, a WAAM part sliced and run on the RWS simulator, and the first layers
+    /// of a G-Wing section printed on the Marlin simulator (`wing_layers:=N`), with a summary
+    /// table at the end. Writes the
     /// programs, the bag of every topic, `cell.rrd` (every node's Rerun log in one recording)
     /// and `bag.rrd` (the bag drawn) to --out, and lists them last.
     Demo {
@@ -140,10 +145,11 @@ enum Command {
     /// DIR/stock.stl. Exit status: 64 bad arguments or profile, 65 a bad mesh or process file
     /// (named), 1 the output cannot be written.
     Slice(slice::SliceArgs),
-    /// Run a program file on one controller (GRBL or ABB RWS) without DDS, with a progress bar;
-    /// Ctrl-C aborts with a safe stop. `--controller grbl-sim` starts the in-repo simulator.
-    /// Exit status: 0 ran to its end, 1 stopped (alarm, bad line, link lost, aborted), 64 bad
-    /// arguments or controller file, 65 a program the controller refuses.
+    /// Run a program file on one controller (GRBL, Marlin or ABB RWS) without DDS, with a
+    /// progress bar; Ctrl-C aborts with a safe stop. `--controller grbl-sim` (or `marlin-sim`)
+    /// starts the in-repo simulator. Exit status: 0 ran to its end, 1 stopped (alarm, bad
+    /// line, link lost, aborted), 64 bad arguments or controller file, 65 a program the
+    /// controller refuses.
     Stream(stream::StreamArgs),
     /// Watch or stop a running machine_bridge node (its machine_status topic and its
     /// machine_command service) without the ROS 2 command line: `cell machine status

@@ -1,6 +1,10 @@
-//! `cell machine status|hold|resume|abort|override`: the operator's view of a running
-//! `machine_bridge` node over DDS, so stopping a machine needs no ROS 2 command line.
+//! `cell machine status|hold|resume|abort|override|arm|disarm|armed`: the operator's view of
+//! a running `machine_bridge` node over DDS, so stopping a machine needs no ROS 2 command line.
 //!
+//! - `arm`, `disarm` and `armed` are local acts, not DDS: they speak to the bridge on this host
+//!   over its arm socket (`cell_bridge::arming`), found from `ROS_DOMAIN_ID` and the bridge's
+//!   name and namespace (`--ros-args -r __ns:=/cell`), or `--socket`. Runs, resume and overrides
+//!   need the bridge armed; hold and abort never do.
 //! - `hold`, `resume`, `abort` and `override` call the bridge's `machine_command` service
 //!   (`cell_msgs/srv/SendMachineCommand`) for one controller (`--machine ID`) or every one, and
 //!   print what the bridge answered.
@@ -63,6 +67,40 @@ pub enum MachineAction {
         #[command(flatten)]
         bridge: BridgeArgs,
     },
+    /// Arm the bridge on this host (a local act over its Unix socket, not DDS): it takes runs,
+    /// resume and overrides from its allowed peers until disarmed, or until --idle seconds
+    /// (default and cap: its arm_idle_timeout_s) pass without machine activity.
+    Arm {
+        /// Idle time of this arming (s).
+        #[arg(long = "idle", value_name = "SECONDS")]
+        seconds: Option<f64>,
+        #[command(flatten)]
+        local: LocalBridgeArgs,
+    },
+    /// Disarm the bridge on this host: runs, resume and overrides are refused (hold and abort
+    /// still work).
+    Disarm(LocalBridgeArgs),
+    /// Print whether the bridge on this host is armed, and for how long.
+    Armed(LocalBridgeArgs),
+}
+
+/// The bridge on this host, reached over its arm socket.
+#[derive(Args, Debug)]
+pub struct LocalBridgeArgs {
+    /// The bridge's arm socket (its `arm_socket` parameter); default: the one a bridge of this
+    /// name and namespace on ROS_DOMAIN_ID uses.
+    #[arg(long, value_name = "PATH")]
+    pub socket: Option<std::path::PathBuf>,
+    /// Seconds to wait for the bridge's answer.
+    #[arg(long, value_name = "S", default_value_t = 5.0)]
+    pub timeout: f64,
+    /// Last on the line: ROS arguments naming the bridge, e.g. `--ros-args -r __ns:=/cell`.
+    #[arg(
+        value_name = "--ros-args …",
+        trailing_var_arg = true,
+        allow_hyphen_values = true
+    )]
+    pub ros_args: Vec<String>,
 }
 
 /// Which override, and how much.
@@ -102,20 +140,25 @@ pub struct BridgeArgs {
 }
 
 impl MachineAction {
-    fn bridge(&self) -> &BridgeArgs {
+    /// The DDS bridge arguments; `None` for the local arming actions.
+    fn bridge(&self) -> Option<&BridgeArgs> {
         match self {
             MachineAction::Status { bridge, .. }
             | MachineAction::Hold(bridge)
             | MachineAction::Resume(bridge)
             | MachineAction::Abort(bridge)
-            | MachineAction::Override { bridge, .. } => bridge,
+            | MachineAction::Override { bridge, .. } => Some(bridge),
+            MachineAction::Arm { .. } | MachineAction::Disarm(_) | MachineAction::Armed(_) => None,
         }
     }
 
     /// The service command and its value; `None` for `status`.
     fn command(&self) -> Option<(u8, u16)> {
         match self {
-            MachineAction::Status { .. } => None,
+            MachineAction::Status { .. }
+            | MachineAction::Arm { .. }
+            | MachineAction::Disarm(_)
+            | MachineAction::Armed(_) => None,
             MachineAction::Hold(_) => Some((MachineCommand::COMMAND_HOLD, 0)),
             MachineAction::Resume(_) => Some((MachineCommand::COMMAND_RESUME, 0)),
             MachineAction::Abort(_) => Some((MachineCommand::COMMAND_ABORT, 0)),
@@ -135,7 +178,19 @@ impl MachineAction {
 /// Runs `cell machine`.
 pub fn run(action: MachineAction) -> ExitCode {
     cell_runtime::logging::init(Some("warn"));
-    let bridge = action.bridge();
+    let bridge = match (&action, action.bridge()) {
+        (MachineAction::Arm { seconds, local }, _) => {
+            return match seconds {
+                Some(s) if !(s.is_finite() && *s > 0.0) => exit::usage("--idle must be > 0"),
+                Some(s) => arm(local, &format!("arm {s}")),
+                None => arm(local, "arm"),
+            }
+        }
+        (MachineAction::Disarm(local), _) => return arm(local, "disarm"),
+        (MachineAction::Armed(local), _) => return arm(local, "state"),
+        (_, Some(bridge)) => bridge,
+        (_, None) => unreachable!("only the arming actions have no DDS bridge"),
+    };
     if !(bridge.timeout.is_finite() && bridge.timeout > 0.0) {
         return exit::usage("--timeout must be > 0");
     }
@@ -182,6 +237,51 @@ pub fn run(action: MachineAction) -> ExitCode {
     drop(runtime);
     drop(participant);
     code
+}
+
+/// Sends one request to the arm socket of the bridge on this host and prints its answer.
+fn arm(local: &LocalBridgeArgs, request: &str) -> ExitCode {
+    if !(local.timeout.is_finite() && local.timeout > 0.0) {
+        return exit::usage("--timeout must be > 0");
+    }
+    if local.ros_args.first().is_some_and(|a| a != "--ros-args") {
+        return exit::usage(format!(
+            "unexpected argument {:?} (ROS arguments go last, after --ros-args)",
+            local.ros_args[0]
+        ));
+    }
+    let path = match &local.socket {
+        Some(path) => path.clone(),
+        None => match NodeSetup::from_args("machine_bridge", local.ros_args.clone()) {
+            Ok(setup) => {
+                let ros = &setup.args.ros;
+                let name = ros.node_name.as_deref().unwrap_or("machine_bridge");
+                let namespace = ros.namespace.as_deref().unwrap_or("/");
+                let node = cell_runtime::params::fully_qualified(namespace, name);
+                cell_bridge::arming::default_socket_path(setup.domain_id, &node)
+            }
+            Err(e) => return exit::usage(format!("{e:#}")),
+        },
+    };
+    let runtime = match tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => return exit::failure(format!("cannot start the async runtime: {e}")),
+    };
+    let timeout = Duration::from_secs_f64(local.timeout);
+    match runtime.block_on(cell_bridge::arming::request(&path, request, timeout)) {
+        Ok(answer) if answer.starts_with("error") => exit::failure(answer),
+        Ok(answer) => {
+            println!("{answer}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => no_bridge(format!(
+            "{e:#}: is a machine_bridge running on this host, as this user, with this name, \
+             namespace (--ros-args -r __ns:=…) and ROS_DOMAIN_ID (or pass --socket)?"
+        )),
+    }
 }
 
 /// The `cell_machine` node: the bridge's domain, network, namespace and remappings; no fast

@@ -43,8 +43,9 @@ fn exit(code: u8, message: impl std::fmt::Display) -> ExitCode {
     ExitCode::from(code)
 }
 
-/// Reads the files into a program: RAPID when any file is a `.mod`, `.modx` or `.pgf`.
-fn read_program(paths: &[PathBuf]) -> Result<MachineProgram, String> {
+/// Reads the files into a program: RAPID when any file is a `.mod`, `.modx` or `.pgf`; else
+/// G-code in `gcode_dialect` (the controller's: `grbl` or `marlin`).
+fn read_program(paths: &[PathBuf], gcode_dialect: &str) -> Result<MachineProgram, String> {
     let mut files = Vec::new();
     for p in paths {
         let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
@@ -68,7 +69,7 @@ fn read_program(paths: &[PathBuf]) -> Result<MachineProgram, String> {
         .unwrap_or_default();
     Ok(MachineProgram {
         job_id,
-        dialect: if rapid { "rapid" } else { "grbl" }.into(),
+        dialect: if rapid { "rapid" } else { gcode_dialect }.into(),
         line_count: files.iter().map(|f| f.text.lines().count() as u32).sum(),
         files,
         ..MachineProgram::default()
@@ -82,7 +83,11 @@ pub fn run(args: StreamArgs) -> ExitCode {
         Ok(s) => s,
         Err(e) => return exit(cell_runtime::EXIT_USAGE, e),
     };
-    let program = match read_program(&args.program) {
+    let dialect = match &spec {
+        ControllerSpec::Marlin(_) => "marlin",
+        _ => "grbl",
+    };
+    let program = match read_program(&args.program, dialect) {
         Ok(p) => p,
         Err(e) => return exit(cell_runtime::EXIT_DATA, e),
     };
@@ -105,15 +110,18 @@ async fn stream(spec: ControllerSpec, program: MachineProgram, args: &StreamArgs
         Ok(c) => c,
         Err(e) => return exit(1, e),
     };
-    if let Controller::Grbl(g) = &controller {
-        let timeout = Duration::from_secs_f64(args.connect_timeout);
-        if !g.wait_connected(timeout).await {
-            let why = controller.status().alarm;
-            return exit(
-                1,
-                format!("{}: no answer within {timeout:?}: {why}", controller.id()),
-            );
-        }
+    let timeout = Duration::from_secs_f64(args.connect_timeout);
+    let connected = match &controller {
+        Controller::Grbl(g) => Some(g.wait_connected(timeout).await),
+        Controller::Marlin(m) => Some(m.wait_connected(timeout).await),
+        Controller::Rws(_) => None,
+    };
+    if connected == Some(false) {
+        let why = controller.status().alarm;
+        return exit(
+            1,
+            format!("{}: no answer within {timeout:?}: {why}", controller.id()),
+        );
     }
     let bar = indicatif::ProgressBar::new(100);
     bar.set_style(
@@ -197,19 +205,24 @@ mod tests {
             p
         };
         let g = w("wing.ngc", "G21\nG0 X1\n");
-        let p = read_program(std::slice::from_ref(&g)).unwrap();
+        let p = read_program(std::slice::from_ref(&g), "grbl").unwrap();
         assert_eq!(
             (p.dialect.as_str(), p.job_id.as_str(), p.line_count),
             ("grbl", "wing", 2)
         );
+        let p = read_program(std::slice::from_ref(&g), "marlin").unwrap();
+        assert_eq!(
+            p.dialect, "marlin",
+            "a G-code file takes the controller's dialect"
+        );
         let m = w("Main.mod", "MODULE Main\nENDMODULE\n");
         let f = w("Main.pgf", "<Program/>\n");
-        let p = read_program(&[m, f]).unwrap();
+        let p = read_program(&[m, f], "grbl").unwrap();
         assert_eq!(p.dialect, "rapid");
         assert_eq!(p.files.len(), 2);
-        let e = read_program(&[g.clone(), g]).unwrap_err();
+        let e = read_program(&[g.clone(), g], "grbl").unwrap_err();
         assert!(e.contains("one file"), "{e}");
-        let e = read_program(&[dir.path().join("nope.ngc")]).unwrap_err();
+        let e = read_program(&[dir.path().join("nope.ngc")], "grbl").unwrap_err();
         assert!(e.contains("nope.ngc"), "{e}");
     }
 }

@@ -81,6 +81,12 @@ async fn plan_hotwire_goal_feedback_and_result_across_nodes() {
                 .send_result_response(executing, GoalEndStatus::Succeeded, result)
                 .await
                 .expect("result");
+            // The client's result request (asked for while the goal ran, still unread) is
+            // answered from the kept result.
+            server
+                .receive_result_request()
+                .await
+                .expect("result request");
         }
     });
 
@@ -150,6 +156,10 @@ async fn a_result_read_after_its_server_left_still_arrives() {
             .send_result_response(executing, GoalEndStatus::Succeeded, result)
             .await
             .expect("result");
+        server
+            .receive_result_request()
+            .await
+            .expect("result request");
         // `server` is dropped here: its writers leave the graph right after the answer.
     });
 

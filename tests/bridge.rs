@@ -33,6 +33,7 @@ fn start_bridge(
         node("machine_bridge", domain, false),
         BridgeParams {
             controllers,
+            arm_at_start: true,
             ..BridgeParams::default()
         },
     ))
@@ -53,6 +54,7 @@ async fn a_program_goes_through_the_bridge_and_the_simulator_executes_it_line_fo
         CellNode::new(setup).unwrap(),
         BridgeParams {
             controllers: vec![file],
+            arm_at_start: true,
             ..BridgeParams::default()
         },
     ));

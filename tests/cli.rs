@@ -182,6 +182,72 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         waam_machine.contains("| waam machine | finished"),
         "{waam_machine}"
     );
+    // The G-Wing job: the Table 2 wing designed, the first 10 layers of its centre section
+    // sliced and emitted for Marlin, and printed on the Marlin simulator: every line
+    // acknowledged (ping-pong, so each ran before the next was sent; M400 before the end), the
+    // heat-up done, and the heaters off at the end by the printer's own M105.
+    let gwing = stdout
+        .lines()
+        .find(|l| l.contains("| gwing   |"))
+        .unwrap_or_else(|| panic!("no gwing row in {stdout}"));
+    let whole: u32 = gwing
+        .split("the first 10 of ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("the first 10 of N layers: {gwing}"));
+    assert!(whole > 10, "{gwing}");
+    assert!(
+        gwing.contains("| gwing   | section 0 (centre 0): "),
+        "{gwing}"
+    );
+    let figure = |row: &str, after: &str| -> f64 {
+        row.split(after)
+            .nth(1)
+            .and_then(|r| r.split([' ', '/', ';', ')']).next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no number after {after:?} in {row}"))
+    };
+    // 10 layers of a 173 mm chord perimeter with spars: about a gram of PLA, minutes of printing.
+    let mass = figure(gwing, "layers (a short demo print), ");
+    assert!(mass > 0.3 && mass < 3.0, "{gwing}");
+    let minutes = figure(gwing, "build time ");
+    assert!(minutes > 1.0 && minutes < 15.0, "{gwing}");
+    let gwing_program = std::fs::read_to_string(out_dir.path().join("demo-gwing.gcode")).unwrap();
+    assert!(gwing_program.contains("M190 S60") && gwing_program.contains("M109 S210"));
+    let gwing_lines = gwing_program.lines().count();
+    let sent_lines = gwing_program
+        .lines()
+        .filter(|l| !l.split(';').next().unwrap().trim().is_empty())
+        .count();
+    let gwing_machine = stdout
+        .lines()
+        .find(|l| l.contains("| gwing machine |"))
+        .unwrap_or_else(|| panic!("no gwing machine row in {stdout}"));
+    assert!(
+        gwing_machine.contains(&format!(
+            "| gwing machine | finished: line {gwing_lines} of {gwing_lines} acknowledged"
+        )) && gwing_machine.contains(", 0 link drops"),
+        "{gwing_machine}"
+    );
+    assert!(
+        gwing_machine.contains(&format!("{sent_lines} lines streamed to marlin-sim")),
+        "{sent_lines} lines: {gwing_machine}"
+    );
+    // It heated for real (M190 S60, M109 S210 waited) and ended with both targets at 0.
+    assert!(
+        figure(gwing_machine, "heated to T:") >= 209.0,
+        "{gwing_machine}"
+    );
+    assert!(figure(gwing_machine, " B:") >= 59.0, "{gwing_machine}");
+    let confirmed = gwing_machine
+        .split("heaters off, confirmed by M105: ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no M105 confirmation: {gwing_machine}"));
+    assert!(
+        confirmed.contains(" /0 B:") && confirmed.trim_end_matches([' ', '|']).ends_with(" /0"),
+        "{gwing_machine}"
+    );
     // The recorder's bag holds the job's messages (finished: it has its summary).
     let info = cell_bag::BagInfo::open(out_dir.path().join("bag")).expect("the demo's bag reads");
     for (topic, ros_type) in [
@@ -190,6 +256,7 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         ("/cell/machine_status", "cell_msgs/msg/MachineStatus"),
         ("/cell/layer_stack", "cell_msgs/msg/LayerStack"),
         ("/cell/waam_toolpath", "cell_msgs/msg/Toolpath"),
+        ("/cell/wing_toolpath", "cell_msgs/msg/Toolpath"),
     ] {
         let t = info
             .topics
@@ -256,6 +323,7 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "demo-wing.ngc",
         "demo-sheet.ngc",
         "WAAM_demo_waam.mod",
+        "demo-gwing.gcode",
     ] {
         let path = out_dir.path().join(file).display().to_string();
         assert!(outputs.contains(&path), "{path} not in {outputs}");
@@ -297,6 +365,15 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "/machine/grbl-laser-sim/trace/0",
         "/waam/layers/beads",
         "/waam/stock",
+        // The G-Wing section's layers (the wing slicer) and the printer's position (the bridge).
+        "/wing/layers/perimeter",
+        "/wing/layers/spars",
+        "/wing/layers/rib",
+        "/machine/marlin-sim/position",
+        // Its heat-up, print and cool-down (the bridge logs the printer's M105 readings).
+        "/machine/marlin-sim/temperature/hotend",
+        "/machine/marlin-sim/temperature/hotend_target",
+        "/machine/marlin-sim/temperature/bed",
     ] {
         assert!(dump.contains(entity), "cell.rrd has no {entity}");
     }

@@ -16,9 +16,9 @@ use cell_msgs::{
     MachineStatus, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, SequenceSheetFeedback,
     SequenceSheetGoal, SequenceSheetResult, SliceFeedback, SliceGoal, SliceResult, Toolpath,
 };
-use cell_runtime::action::{request_result, ActionClient, GoalStatusEnum};
+use cell_runtime::action::{ActionClient, GoalStatusEnum};
 use cell_runtime::{CellNode, QosPreset, Subscriber};
-use common::{discover_action_server, fresh_domain, node, within, DELIVERY_TIMEOUT};
+use common::{cancel_when, discover_action_server, fresh_domain, node, within, DELIVERY_TIMEOUT};
 use futures::StreamExt;
 
 /// A client of `action` on `client_node`, once the server is discovered.
@@ -56,15 +56,7 @@ where
     R: ros2_client::Message + Clone + 'static,
     F: ros2_client::Message + 'static,
 {
-    let (goal_id, response) = within(client.async_send_goal(goal)).await.expect("sent");
-    assert!(response.accepted, "a good goal is accepted");
-    let result = request_result(
-        client,
-        goal_id,
-        10 * DELIVERY_TIMEOUT,
-        10 * DELIVERY_TIMEOUT,
-    );
-    let cancel = async {
+    cancel_when(client, goal, 10 * DELIVERY_TIMEOUT, |goal_id| async move {
         let feedback = client.feedback_stream(goal_id);
         let mut feedback = std::pin::pin!(feedback);
         loop {
@@ -74,10 +66,8 @@ where
                 None => panic!("feedback ended before the run was under way"),
             }
         }
-        client.cancel_goal(goal_id).expect("cancel sent");
-    };
-    let (result, ()) = tokio::join!(result, cancel);
-    result.expect("result")
+    })
+    .await
 }
 
 /// Asserts nothing arrives on `toolpaths` for two seconds.
@@ -136,7 +126,7 @@ async fn the_planner_rejects_a_malformed_goal_and_honours_cancel() {
     );
 
     let (status, result) =
-        cancel_while_running(&client, goal(150.0, 1_000_000), |f| f.iteration >= 1).await;
+        cancel_while_running(&client, goal(150.0, 100_000), |f| f.iteration >= 1).await;
     assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
     assert!(!result.success);
     assert!(
@@ -153,8 +143,13 @@ async fn the_planner_rejects_a_malformed_goal_and_honours_cancel() {
 async fn the_sequencer_rejects_a_malformed_goal_and_honours_cancel() {
     let domain = fresh_domain();
     let params = sequencer::SequencerParams {
-        max_iterations: 1_000_000_000,
+        max_iterations: cell_sequencer::improve::MAX_IMPROVE_ITERATIONS,
         feedback_every: 1,
+        // The layout is test data (files in goals are confined: `cell_runtime::data_files`).
+        data_dirs: vec![
+            concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data").into(),
+            "config".into(),
+        ],
         ..sequencer::SequencerParams::default()
     };
     let sequencer = tokio::spawn(sequencer::run(node("sequencer", domain, false), params));
@@ -206,6 +201,10 @@ async fn the_slicer_rejects_a_malformed_goal_and_honours_cancel() {
         node("slicer", domain, false),
         slicer::SlicerParams {
             log_stock_mesh: false,
+            data_dirs: vec![
+                concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data").into(),
+                "config".into(),
+            ],
             ..slicer::SlicerParams::default()
         },
     ));
@@ -294,6 +293,7 @@ async fn the_machine_bridge_rejects_a_malformed_goal_and_honours_cancel() {
         node("machine_bridge", domain, false),
         machine_bridge::BridgeParams {
             controllers: vec![controller.display().to_string()],
+            arm_at_start: true,
             ..machine_bridge::BridgeParams::default()
         },
     ));

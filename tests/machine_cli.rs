@@ -86,6 +86,8 @@ fn start_bridge(domain: u16, controller: &Path, log: &Path) -> Child {
             "-r",
             "__ns:=/cell",
             "-p",
+            "arm_at_start:=true",
+            "-p",
         ])
         .arg(format!("controllers:=['{}']", controller.display()))
         .env("ROS_DOMAIN_ID", domain.to_string())
@@ -265,8 +267,13 @@ async fn cell_machine_watches_holds_resumes_and_aborts_a_running_bridge() {
             held.acked_line
         );
 
-        // Resume, for every controller (no --machine): it moves on.
-        let (stdout, _) = expect_exit(&at_cell(domain, &["resume"]).await, 0);
+        // Resume must name its machine (only stops address every one); then it moves on.
+        let (_, stderr) = expect_exit(&at_cell(domain, &["resume"]).await, 1);
+        assert!(stderr.contains("machine_id is empty"), "{stderr}");
+        let (stdout, _) = expect_exit(
+            &at_cell(domain, &["resume", "--machine", "cutter"]).await,
+            0,
+        );
         assert!(stdout.contains("cutter"), "{stdout}");
         status_until(&mut status, "cutter", |s| {
             s.state == MachineStatus::STATE_RUNNING && s.axis_positions != now.axis_positions

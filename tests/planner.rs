@@ -124,7 +124,7 @@ async fn planner_node_plans_a_goal_and_survives_a_bad_one() {
     {
         use futures::StreamExt;
         let long = PlanHotwireGoal {
-            iterations: 1_000_000,
+            iterations: 100_000, // the most a goal may ask (cell_planner MAX_ITERATIONS)
             ..goal(150.0, "long-1")
         };
         let (goal_id, response) = within(client.async_send_goal(long)).await.expect("sent");

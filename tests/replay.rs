@@ -102,6 +102,7 @@ fn emitter_and_bridge(domain: u16, controller: String) -> Vec<Shutdown> {
         BridgeParams {
             controllers: vec![controller],
             program_topic: "machine_program".into(),
+            arm_at_start: true,
             ..BridgeParams::default()
         },
     ));

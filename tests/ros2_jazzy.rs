@@ -133,7 +133,13 @@ fn start_cell(domain: u16, controller: &str) -> Vec<Shutdown> {
         start(
             "slicer",
             domain,
-            &["-r", "toolpath:=waam_toolpath"],
+            // The peer's parts are test data (files in goals: `cell_runtime::data_files`).
+            &[
+                "-r",
+                "toolpath:=waam_toolpath",
+                "-p",
+                "data_dirs:=[config, tests/data]",
+            ],
             slicer::run,
         ),
         start(
@@ -145,7 +151,14 @@ fn start_cell(domain: u16, controller: &str) -> Vec<Shutdown> {
         start(
             "machine_bridge",
             domain,
-            &["-p", &controllers, "-p", "feedback_period_s:=0.05"],
+            &[
+                "-p",
+                &controllers,
+                "-p",
+                "feedback_period_s:=0.05",
+                "-p",
+                "arm_at_start:=true",
+            ],
             machine_bridge::run,
         ),
     ]
@@ -223,12 +236,22 @@ fn only_checks() -> Vec<String> {
     }
 }
 
-/// Runs the peer; its JSON lines by check. Its progress goes to stderr.
+/// Runs the peer (`only` those checks, else every default one or [`only_checks`]); its JSON
+/// lines by check. Its progress goes to stderr.
 async fn run_peer(
     jazzy: &cell_testkit::JazzyEnv,
     domain: u16,
     log_dir: &Path,
+    only: &[&str],
 ) -> BTreeMap<String, Vec<Value>> {
+    let only: Vec<String> = if only.is_empty() {
+        only_checks()
+    } else {
+        std::iter::once("--only")
+            .chain(only.iter().copied())
+            .map(str::to_string)
+            .collect()
+    };
     let mut peer = tokio::process::Command::new(&jazzy.python)
         .arg(format!("{ROOT}/tests/ros2/jazzy_peer.py"))
         .args(["--ns", "/cell", "--repo", ROOT, "--timeout", "30"])
@@ -240,7 +263,7 @@ async fn run_peer(
         ])
         .arg("--install")
         .arg(&jazzy.install)
-        .args(only_checks())
+        .args(only)
         .envs(jazzy.vars.iter().map(|(k, v)| (k, v)))
         .env("ROS_DOMAIN_ID", domain.to_string())
         .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
@@ -296,7 +319,7 @@ async fn a_stock_jazzy_rclpy_peer_drives_every_cell_interface() {
         common::machines::grbl_sim(dir.path(), "cutter", Faults::default(), 10.0, "").await;
     let mut stops = start_cell(domain, &controller);
     stops.extend(start_sim(domain, dir.path()));
-    let checks = run_peer(&jazzy, domain, dir.path()).await;
+    let checks = run_peer(&jazzy, domain, dir.path(), &[]).await;
     for stop in stops {
         stop.trigger();
     }
@@ -320,6 +343,67 @@ async fn a_stock_jazzy_rclpy_peer_drives_every_cell_interface() {
     bag_clock(&checks);
     rosout(&checks);
     type_hashes(&checks);
+}
+
+/// A printer's heaters reach a stock rclpy node: the bridge driving the Marlin simulator
+/// (`marlin-sim`, idle and cold) publishes its hotend as `sensor_msgs/Temperature` on
+/// `marlin_sim/temperature/hotend` with stock rosidl's type hash, and its heaters' current and
+/// target temperatures among its `/diagnostics` values.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_stock_jazzy_rclpy_peer_reads_the_printer_heaters() {
+    let Some(jazzy) = cell_testkit::jazzy_workspace(Path::new(env!("CARGO_TARGET_TMPDIR"))) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let domain = fresh_domain();
+    let bridge = start(
+        "machine_bridge",
+        domain,
+        &["-p", "controllers:=[marlin-sim]"],
+        machine_bridge::run,
+    );
+    let checks = run_peer(&jazzy, domain, dir.path(), &["heaters", "type_hash"]).await;
+    bridge.trigger();
+    for line in checks.values().flatten() {
+        eprintln!("{line}");
+    }
+    let t = lines_where(&checks, "heaters", "view", "temperature")[0];
+    assert_eq!(t["frame_id"], frames::heater("marlin-sim", "hotend"), "{t}");
+    assert_eq!(t["variance"], 0.0, "unknown: {t}");
+    assert!(t["stamp_ns"].as_u64().unwrap() > 0, "{t}");
+    let hotend_c = t["temperature"].as_f64().unwrap();
+    assert!((15.0..40.0).contains(&hotend_c), "cold, at ambient: {t}");
+
+    let d = lines_where(&checks, "heaters", "view", "diagnostics")[0];
+    assert_eq!(d["name"], "machine_bridge: marlin-sim", "{d}");
+    let value = |key: &str| -> f64 {
+        let text = d["values"][key].as_str();
+        text.unwrap_or_else(|| panic!("no {key}: {d}"))
+            .parse()
+            .unwrap()
+    };
+    assert_eq!(value("heater/hotend/target_c"), 0.0, "{d}");
+    assert_eq!(value("heater/bed/target_c"), 0.0, "{d}");
+    assert!(
+        (value("heater/hotend/current_c") - hotend_c).abs() < 1.0,
+        "{d}"
+    );
+
+    let endpoints: Vec<&Value> = checks["type_hash"]
+        .iter()
+        .filter(|l| l["type"] == "sensor_msgs/msg/Temperature")
+        .collect();
+    assert!(!endpoints.is_empty(), "{:?}", checks["type_hash"]);
+    for l in endpoints {
+        assert!(l["built"].is_string(), "the venv describes it: {l}");
+        assert_eq!(l["announced"], l["built"], "stock rosidl's hash: {l}");
+        let topic = l["topic"].as_str().unwrap();
+        assert!(
+            topic.ends_with("cell/marlin_sim/temperature/hotend")
+                || topic.ends_with("cell/marlin_sim/temperature/bed"),
+            "{l}"
+        );
+    }
 }
 
 fn discovery(checks: &Checks) {

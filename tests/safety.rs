@@ -22,7 +22,7 @@ use cell_msgs::{
     ExecuteProgramGoal, MachineCommand, SendMachineCommandRequest, SendMachineCommandResponse,
 };
 use common::machines::{goal, grbl_program, grbl_sim, operator, Operator};
-use common::{fresh_domain, within, DELIVERY_TIMEOUT};
+use common::{cancel_when, fresh_domain, within, DELIVERY_TIMEOUT};
 
 /// A `machine_bridge` process and the lines it wrote to stderr so far.
 struct BridgeProcess {
@@ -37,7 +37,7 @@ impl BridgeProcess {
         std::fs::write(
             &params,
             format!(
-                "/**:\n  ros__parameters:\n    controllers: ['{controller_file}']\n    status_rate_hz: 10.0\n"
+                "/**:\n  ros__parameters:\n    controllers: ['{controller_file}']\n    status_rate_hz: 10.0\n    arm_at_start: true\n"
             ),
         )
         .unwrap();
@@ -294,23 +294,14 @@ async fn a_bridge_killed_mid_program_is_followed_by_one_that_finds_the_heat_on_a
 async fn a_cancelled_goal_ends_canceled_with_the_heat_read_back_off() {
     let cell = Cell::start("cancel").await;
     let client = &cell.op.client;
-    let (goal_id, response) =
-        within(client.async_send_goal(goal(&grbl_program("cancel", 400), "")))
-            .await
-            .expect("sent");
-    assert!(response.accepted);
-    let result = cell_runtime::action::request_result(
+    let result = cancel_when(
         client,
-        goal_id,
+        goal(&grbl_program("cancel", 400), ""),
         DELIVERY_TIMEOUT * 4,
-        DELIVERY_TIMEOUT * 4,
-    );
-    let cancel = async {
-        cutting(&cell.sim).await;
-        client.cancel_goal(goal_id).expect("cancel sent");
-    };
-    let (result, ()) = tokio::join!(result, cancel);
-    let (status, result) = result.expect("result");
+        |_| cutting(&cell.sim),
+    )
+    .await;
+    let (status, result) = result;
     assert_eq!(
         status,
         cell_runtime::action::GoalStatusEnum::Canceled,

@@ -65,7 +65,15 @@ async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_b
     let shutdown = setup.shutdown.clone();
     let server_node = cell_runtime::CellNode::new(setup).unwrap();
     let client_node = common::node("operator", domain, false);
-    let slicer = tokio::spawn(run(server_node, SlicerParams::default()));
+    // The parts are test data (files in goals are confined: `cell_runtime::data_files`).
+    let params = SlicerParams {
+        data_dirs: vec![
+            concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data").into(),
+            "config".into(),
+        ],
+        ..SlicerParams::default()
+    };
+    let slicer = tokio::spawn(run(server_node, params));
     let mut toolpaths = client_node
         .subscriber::<Toolpath>("/toolpath", QosPreset::Plan)
         .unwrap();
@@ -213,6 +221,41 @@ async fn slicer_node_slices_a_cube_a_wing_section_and_a_real_part_and_survives_b
         .iter()
         .filter(|s| s.kind == ToolpathSegment::KIND_DEPOSIT)
         .all(|s| s.power.iter().all(|&q| q > 0.0)));
+
+    // A two-point design (seed 002 Table 1, two-point inverse #2: c_ℓ1, c_ℓ2 → c, α), named
+    // relative to the data directory `config`: the design case and both conditions come back
+    // in the report, each meeting its local c_ℓ (0.3 → 0.15 and 1.0 → 0.85 root → tip).
+    let (_, status, result) = slice(
+        &client,
+        SliceGoal {
+            job_id: "wing-two-point".into(),
+            wing_spec_file: "wings/two-point-cl.yaml".into(),
+            wing_section: 0,
+            ..Default::default()
+        },
+    )
+    .await;
+    assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+    assert!(result.layer_stack.layers.len() > 10);
+    let report: serde_json::Value = serde_json::from_str(&result.report_json).unwrap();
+    let design = &report["design"];
+    assert_eq!(design["case"], "two_cl", "{design}");
+    assert!((design["aspect_ratio"].as_f64().unwrap() - 8.0).abs() < 1e-9);
+    let conditions = design["conditions"].as_array().unwrap();
+    assert_eq!(conditions.len(), 2, "{design}");
+    for (c, (lo, hi)) in conditions.iter().zip([(0.15, 0.3), (0.85, 1.0)]) {
+        assert!(c["target_error"].as_f64().unwrap() < 1e-9, "{c}");
+        let (min, max) = (
+            c["local_c_l_min"].as_f64().unwrap(),
+            c["local_c_l_max"].as_f64().unwrap(),
+        );
+        assert!((min - lo).abs() < 2e-3 && (max - hi).abs() < 2e-3, "{c}");
+    }
+    assert_eq!(report["c_l"], conditions[0]["c_l"]);
+    assert!(
+        design["delta_alpha_deg"].as_f64().unwrap() > 0.0,
+        "{design}"
+    );
 
     // A section the design does not have: named.
     let (_, status, result) = slice(

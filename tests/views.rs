@@ -91,6 +91,10 @@ async fn a_sheet_toolpath_and_its_heat_are_published_as_path_markers_and_images(
         max_iterations: 10,
         frame_every_steps: 50,
         max_frames: 20,
+        data_dirs: vec![
+            concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data").into(),
+            "config".into(),
+        ],
         ..Default::default()
     };
     let server = tokio::spawn(sequencer::run(node("sequencer", domain, false), params));
@@ -337,7 +341,13 @@ async fn a_waam_part_has_one_deposit_marker_per_layer_under_the_remapped_topic()
     .expect("arguments");
     let server = tokio::spawn(slicer::run(
         CellNode::new(setup).unwrap(),
-        slicer::SlicerParams::default(),
+        slicer::SlicerParams {
+            data_dirs: vec![
+                concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data").into(),
+                "config".into(),
+            ],
+            ..slicer::SlicerParams::default()
+        },
     ));
     let client_node = node("viewer", domain, false);
     let mut toolpaths = client_node
@@ -410,6 +420,7 @@ async fn the_bridge_publishes_joint_states_tool_frames_and_diagnostics() {
         node("machine_bridge", domain, false),
         machine_bridge::BridgeParams {
             controllers: vec![file],
+            arm_at_start: true,
             ..Default::default()
         },
     ));
@@ -511,6 +522,10 @@ async fn standard_views_false_publishes_no_view() {
         sequencer::SequencerParams {
             max_iterations: 5,
             standard_views: false,
+            data_dirs: vec![
+                concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data").into(),
+                "config".into(),
+            ],
             ..Default::default()
         },
     ));

@@ -57,6 +57,21 @@ fn cell_wing_writes_one_marlin_program_per_section_and_a_report() {
         let m = s["mass_g"].as_f64().unwrap();
         assert!((m - volume * 1.24e-3).abs() < 1e-6 * m.max(1.0), "{s}");
         assert!(s["build_time_with_acceleration_s"].as_f64() >= s["build_time_s"].as_f64());
+        // Build time three ways (Pronterface's method and Marlin's planner add acceleration
+        // to Σ L/v: 3–11 % on these sections), of the moves and of the program as written.
+        let t = |k: &str| {
+            s["times"][k]
+                .as_f64()
+                .unwrap_or_else(|| panic!("times.{k}: {s}"))
+        };
+        for k in ["pronterface_s", "marlin_s"] {
+            let over = t(k) / t("feeds_only_s") - 1.0;
+            assert!(
+                (0.0..0.15).contains(&over),
+                "{k}: {over:.3} over Σ L/v: {s}"
+            );
+        }
+        assert!(t("program_marlin_s") > 0.0 && t("program_pronterface_s") > 0.0);
         mass += m;
     }
     assert!((report["total_mass_g"].as_f64().unwrap() - mass).abs() < 1e-9);
@@ -95,4 +110,96 @@ fn cell_wing_names_a_bad_spec_and_bad_options() {
     assert_eq!(code, Some(64), "{stderr}");
     assert!(stderr.contains("not an extrusion profile"), "{stderr}");
     assert!(!dir.path().join("out").join("report.json").exists());
+}
+
+/// Every design case of seed 002 Table 1 through `cell wing --spec` (issue 24): the case, the
+/// solved planform and each condition, requested against achieved, on stdout and in
+/// report.json; a design field no wing can meet is named with the file (exit 65).
+#[test]
+fn cell_wing_reports_each_design_case() {
+    let dir = tempfile::tempdir().unwrap();
+    for (file, case, conditions) in [
+        ("direct-washout", "direct", 1),
+        ("gwing-table2", "inverse_twist", 1),
+        ("single-point-inverse-chord", "inverse_chord", 1),
+        ("two-point-lift", "two_lift", 2),
+        ("two-point-cl", "two_cl", 2),
+        ("two-point-lift-cl", "lift_and_cl", 2),
+    ] {
+        let out = dir.path().join(file);
+        let run = Command::new(CELL)
+            .args([
+                "wing",
+                "--spec",
+                &repo(&format!("config/wings/{file}.yaml")),
+            ])
+            .arg("--out")
+            .arg(&out)
+            .args(["--sections", "0", "--layers", "2"])
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&run.stdout);
+        assert!(
+            run.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        assert!(
+            stdout.starts_with(&format!("design {case} (")),
+            "{file}: {stdout}"
+        );
+        assert_eq!(
+            stdout.matches("  condition ").count(),
+            conditions,
+            "{stdout}"
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap())
+                .unwrap();
+        let design = &report["design"];
+        assert_eq!(design["case"], case, "{design}");
+        assert!((design["aspect_ratio"].as_f64().unwrap() - 8.0).abs() < 1e-9);
+        assert!(
+            design["lift_slope_per_rad"].as_f64().unwrap() > 4.0,
+            "{design}"
+        );
+        let conds = design["conditions"].as_array().unwrap();
+        assert_eq!(conds.len(), conditions, "{design}");
+        assert_eq!(report["c_l"], conds[0]["c_l"]);
+        assert_eq!(design["delta_alpha_deg"].is_null(), conditions == 1);
+        for c in conds {
+            // Direct design asks for no lift; every inverse case meets its target.
+            match c["target_error"].as_f64() {
+                Some(e) => assert!(e < 1e-9, "{file}: {c}"),
+                None => assert_eq!(case, "direct"),
+            }
+        }
+    }
+    // ℓ₂ − ℓ₁ changes sign near the tips (elliptic at 0.3, bell at 1.0): named, exit 65.
+    let spec = std::fs::read_to_string(repo("config/wings/two-point-lift.yaml"))
+        .unwrap()
+        .replace(
+            "first: {lift: bell, c_l: 0.2}",
+            "first: {lift: elliptic, c_l: 0.3}",
+        )
+        .replace(
+            "second: {lift: elliptic, c_l: 1.0}",
+            "second: {lift: bell, c_l: 1.0}",
+        )
+        .replace("../airfoils/ag24.dat", &repo("config/airfoils/ag24.dat"));
+    let bad = dir.path().join("crossing.yaml");
+    std::fs::write(&bad, spec).unwrap();
+    let run = Command::new(CELL)
+        .args(["wing", "--spec"])
+        .arg(&bad)
+        .arg("--out")
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(65), "{stderr}");
+    assert!(
+        stderr.contains("crossing.yaml: field `aero.design.second`: ℓ₂ − ℓ₁ must keep one sign"),
+        "{stderr}"
+    );
 }

@@ -150,6 +150,7 @@ macro_rules! for_each_message {
             $crate::sensor_msgs::Image => "sensor_msgs/msg/Image",
             $crate::sensor_msgs::CompressedImage => "sensor_msgs/msg/CompressedImage",
             $crate::sensor_msgs::JointState => "sensor_msgs/msg/JointState",
+            $crate::sensor_msgs::Temperature => "sensor_msgs/msg/Temperature",
             $crate::tf2_msgs::TFMessage => "tf2_msgs/msg/TFMessage",
             $crate::diagnostic_msgs::DiagnosticArray => "diagnostic_msgs/msg/DiagnosticArray",
             $crate::diagnostic_msgs::DiagnosticStatus => "diagnostic_msgs/msg/DiagnosticStatus",

@@ -153,6 +153,11 @@ const FILES: &[(&str, Kind, &str)] = &[
         include_str!("../std/sensor_msgs/msg/JointState.msg"),
     ),
     (
+        "sensor_msgs/msg/Temperature",
+        Kind::Msg,
+        include_str!("../std/sensor_msgs/msg/Temperature.msg"),
+    ),
+    (
         "tf2_msgs/msg/TFMessage",
         Kind::Msg,
         include_str!("../std/tf2_msgs/msg/TFMessage.msg"),
@@ -490,8 +495,8 @@ mod tests {
     #[test]
     fn every_registered_definition_parses_and_resolves() {
         let names = list();
-        // Messages: cell 11, std 7, rosgraph_msgs 1, the views' standard types 17.
-        assert_eq!(names.len(), 11 + 7 + 1 + 17 + 3 * 2 + 4 * 3);
+        // Messages: cell 11, std 7, rosgraph_msgs 1, the views' standard types 18.
+        assert_eq!(names.len(), 11 + 7 + 1 + 18 + 3 * 2 + 4 * 3);
         for name in &names {
             assert!(definition(name).is_some(), "{name}");
             let spec = spec(name).unwrap_or_else(|e| panic!("{e}"));

@@ -52,3 +52,14 @@ pub struct JointState {
     /// Efforts (N·m or N).
     pub effort: Vec<f64>,
 }
+
+/// A single temperature reading (`sensor_msgs/msg/Temperature`), °C.
+#[derive(Serialize, Deserialize, Clone, Debug, PartialEq, Default)]
+pub struct Temperature {
+    /// Time of the measurement; `frame_id` is where it was taken.
+    pub header: Header,
+    /// The temperature, °C.
+    pub temperature: f64,
+    /// Its variance, °C²; 0: unknown.
+    pub variance: f64,
+}

@@ -112,6 +112,10 @@ const STOCK_JAZZY: &[(&str, &str)] = &[
         "RIHS01_a13ee3a330e346c9d87b5aa18d24e11690752bd33a0350f11c5882bc9179260e",
     ),
     (
+        "sensor_msgs/msg/Temperature",
+        "RIHS01_72514a14126ab9f8a9abec974c78e5610a367b59db5da355ff1fb982d5bad4b8",
+    ),
+    (
         "service_msgs/msg/ServiceEventInfo",
         "RIHS01_41bcbbe07a75c9b52bc96bfd5c24d7f0fc0a08c0cb7921b3373c5732345a6f45",
     ),

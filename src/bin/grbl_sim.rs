@@ -200,12 +200,7 @@ async fn run(args: Args) -> Result<(), String> {
             path.display()
         );
         if let Some(link) = &args.link {
-            if std::fs::symlink_metadata(link).is_ok_and(|m| m.file_type().is_symlink()) {
-                std::fs::remove_file(link).map_err(|e| format!("{}: {e}", link.display()))?;
-            }
-            std::os::unix::fs::symlink(&path, link)
-                .map_err(|e| format!("cannot link {}: {e}", link.display()))?;
-            println!("grbl_sim: linked {} -> {}", link.display(), path.display());
+            cellsuite::sim_process::link_pty("grbl_sim", &path, link)?;
         }
     } else {
         return Err("give --tcp ADDR or --pty".into());
@@ -226,15 +221,8 @@ async fn run(args: Args) -> Result<(), String> {
         overflow,
         alarms
     );
-    if let Some(path) = &args.log {
-        let mut text = executed.join("\n");
-        text.push('\n');
-        std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    if let (true, Some(link)) = (args.pty, &args.link) {
-        let _ = std::fs::remove_file(link);
-    }
-    Ok(())
+    let link = args.link.as_deref().filter(|_| args.pty);
+    cellsuite::sim_process::finish(&executed, args.log.as_deref(), link)
 }
 
 #[cfg(test)]

@@ -168,8 +168,8 @@ pub async fn execute(
     let feedback = client.feedback_stream(goal_id);
     let mut feedback = std::pin::pin!(feedback);
     let result =
-        // One request, held open for the whole run: a retry would drop the request the bridge
-        // answers when the program ends (see `request_result`).
+        // One request, held open for the whole run: the bridge answers it when the program
+        // ends (see `request_result`).
         cell_runtime::action::request_result(client, goal_id, patience, patience);
     let mut result = std::pin::pin!(result);
     let mut seen = Vec::new();

@@ -9,13 +9,19 @@ use std::{
 use cell_runtime::{CellNode, FastPathMode, NodeSetup};
 
 pub mod machines;
+pub mod node_process;
 
 static NEXT: AtomicU16 = AtomicU16::new(0);
 
 /// A DDS domain no other running test uses: test binaries run one at a time, tests inside one
-/// binary get consecutive ids from a per-process base.
+/// binary get consecutive ids from a per-process base. `CELL_TEST_DOMAIN_BASE` (0–216) fixes the
+/// base instead, for people running test binaries side by side on one host.
 pub fn fresh_domain() -> u16 {
-    let base = 100 + (std::process::id() % 8) as u16 * 16;
+    let base = std::env::var("CELL_TEST_DOMAIN_BASE")
+        .ok()
+        .and_then(|b| b.parse::<u16>().ok())
+        .filter(|b| *b <= 216)
+        .unwrap_or(100 + (std::process::id() % 8) as u16 * 16);
     base + NEXT.fetch_add(1, Ordering::Relaxed) % 16
 }
 
@@ -81,9 +87,8 @@ where
         .await
         .expect("stream")
         .expect("feedback");
-    // One request held open for the whole goal: the server answers only the first request it
-    // reads once the goal has ended, so a retry while the goal runs loses the answer (see
-    // `request_result`). Goals in these tests run for seconds, on a loaded machine tens.
+    // Asked again after 3 × DELIVERY_TIMEOUT without an answer, in case the request was lost
+    // (`request_result`); the server answers every request for the goal.
     let (status, result) = cell_runtime::action::request_result(
         client,
         goal_id,
@@ -97,6 +102,32 @@ where
         status,
         result,
     })
+}
+
+/// Sends `goal`, which must be accepted, cancels it once `ready(goal_id)` completes, and
+/// returns the goal's end status and result (asked for while `ready` runs, again after each
+/// `result_wait` without an answer, [`cell_runtime::action::request_result`]).
+pub async fn cancel_when<G, R, F, Ready>(
+    client: &cell_runtime::action::ActionClient<G, R, F>,
+    goal: G,
+    result_wait: Duration,
+    ready: impl FnOnce(cell_runtime::action::GoalId) -> Ready,
+) -> (cell_runtime::action::GoalStatusEnum, R)
+where
+    G: ros2_client::Message + Clone + 'static,
+    R: ros2_client::Message + Clone + 'static,
+    F: ros2_client::Message + 'static,
+    Ready: std::future::Future<Output = ()>,
+{
+    let (goal_id, response) = within(client.async_send_goal(goal)).await.expect("sent");
+    assert!(response.accepted, "the goal is accepted");
+    let result = cell_runtime::action::request_result(client, goal_id, result_wait, result_wait);
+    let cancel = async {
+        ready(goal_id).await;
+        client.cancel_goal(goal_id).expect("cancel sent");
+    };
+    let (result, ()) = tokio::join!(result, cancel);
+    result.expect("result")
 }
 
 /// A Python with `requirements` (a path from the workspace root) installed, in the venv
@@ -142,4 +173,30 @@ pub fn rrd_verify(path: &std::path::Path) {
         path.display(),
         String::from_utf8_lossy(&verify.stderr)
     );
+}
+
+/// A closed 100 × 70 mm rectangle cut (one segment, 8 mm/s, 2.5 A) inside grbl-xy's travel.
+pub fn rectangle_cut(job_id: &str) -> cell_msgs::Toolpath {
+    use cell_msgs::{geometry_msgs::Point, Toolpath, ToolpathSegment};
+    let p = |x: f64, y: f64| Point { x, y, z: 0.0 };
+    let points = vec![
+        p(50.0, 50.0),
+        p(150.0, 50.0),
+        p(150.0, 120.0),
+        p(50.0, 120.0),
+        p(50.0, 50.0),
+    ];
+    Toolpath {
+        job_id: job_id.into(),
+        process: Toolpath::PROCESS_HOTWIRE,
+        power_unit: Toolpath::POWER_WIRE_CURRENT_A,
+        segments: vec![ToolpathSegment {
+            kind: ToolpathSegment::KIND_CUT,
+            feed_mm_s: vec![8.0; points.len()],
+            power: vec![2.5; points.len()],
+            points,
+            ..Default::default()
+        }],
+        ..Default::default()
+    }
 }

@@ -32,6 +32,9 @@ outcomes. The checks, in order (CHECKS below):
               peer's subscriber on <sim-ns>/bag_chatter)
   rosout      the log lines of every cell node on /rosout (rcl_interfaces/Log)
   type_hash   the RIHS01 type hash every cell endpoint announces, beside the built package's
+Only with --only (a bridge driving the Marlin simulator marlin-sim must be running):
+  heaters     the printer's hotend on marlin_sim/temperature/hotend (sensor_msgs/Temperature)
+              and its heaters' values in /diagnostics
 """
 
 import argparse
@@ -69,7 +72,7 @@ from geometry_msgs.msg import Point
 from nav_msgs.msg import Path
 from rcl_interfaces.msg import Log
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Image, JointState
+from sensor_msgs.msg import Image, JointState, Temperature
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage  # the stand-in build_msgs.sh builds (no wheel on PyPI)
 from visualization_msgs.msg import Marker, MarkerArray
@@ -149,6 +152,9 @@ VIEWS = (
     + [(f"{t}/image", Image, STATUS_QOS) for t in HEAT_TOPICS]
     + [
         ("joint_states", JointState, STATUS_QOS),
+        # The printer marlin-sim's hotend (the `heaters` check): <machine as a name
+        # token>/temperature/<heater>.
+        ("marlin_sim/temperature/hotend", Temperature, STATUS_QOS),
         ("/tf", TFMessage, STATUS_QOS),
         ("/tf_static", TFMessage, TF_STATIC_QOS),
         ("/diagnostics", DiagnosticArray, STATUS_QOS),
@@ -202,6 +208,10 @@ class Waiter:
                 return value
             time.sleep(0.05)
         raise TimeoutError(f"{what}: not within {timeout or self.timeout} s")
+
+
+# How long a goal's late feedback may trail its result (see `run_goal`).
+FEEDBACK_GRACE_S = 0.5
 
 
 def toolpath_summary(tp):
@@ -280,10 +290,27 @@ class Peer:
         # executor spins can still be handed a late message (rclpy then raises in the executor
         # thread), and a fresh client's endpoints must be discovered again.
         self.actions = {a: ActionClient(self.node, _action_type(a), self.name(a)) for a in ACTIONS}
+        # Every feedback message by goal, from a plain subscription: an ActionClient forgets a
+        # goal's feedback callback once its result is in, and drops feedback it takes after that
+        # (the result is taken first when both wait), though the server sent it first.
+        self.feedback = {}
+        for a in ACTIONS:
+            self.subscriptions.append(
+                self.node.create_subscription(
+                    _action_type(a).Impl.FeedbackMessage,
+                    f"{self.name(a)}/_action/feedback",
+                    self._feedback,
+                    QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE),
+                )
+            )
         self.clients = {}
         self.executor = MultiThreadedExecutor(num_threads=4)
         self.executor.add_node(self.node)
         threading.Thread(target=self.executor.spin, daemon=True).start()
+
+    def _feedback(self, msg):
+        with self.lock:
+            self.feedback.setdefault(bytes(msg.goal_id.uuid), []).append(msg.feedback)
 
     def _sample(self, topic, msg):
         with self.lock:
@@ -447,12 +474,19 @@ class Peer:
         elif during:
             seen.update(during(feedback))
         answer = self.wait.future(result_future, f"{action} result", timeout=3 * self.args.timeout)
+        seconds = round(time.monotonic() - t0, 2)
+        # Feedback and the result travel on different DDS endpoints, and ROS 2 does not order one
+        # against the other: a feedback sent just before the result may land just after it. It
+        # still counts (the plain subscription's copy; see __init__).
+        time.sleep(FEEDBACK_GRACE_S)
+        with self.lock:
+            every = list(self.feedback.get(bytes(handle.goal_id.uuid), feedback))
         seen.update(
             status=STATUS_NAMES.get(answer.status, answer.status),
-            feedback_count=len(feedback),
-            first_feedback=to_plain(feedback[0]) if feedback else None,
-            last_feedback=to_plain(feedback[-1]) if feedback else None,
-            seconds=round(time.monotonic() - t0, 2),
+            feedback_count=len(every),
+            first_feedback=to_plain(every[0]) if every else None,
+            last_feedback=to_plain(every[-1]) if every else None,
+            seconds=seconds,
         )
         seen["result"] = answer.result
         return seen
@@ -481,7 +515,7 @@ class Peer:
             baseline_loss=r.baseline_loss,
         )
         long = PlanHotwire.Goal(
-            job_id="jazzy-cancel", root_airfoil="s1223", root_chord_mm=150.0, machine_profile="grbl-xyuv", iterations=200000, seed=8
+            job_id="jazzy-cancel", root_airfoil="s1223", root_chord_mm=150.0, machine_profile="grbl-xyuv", iterations=100000, seed=8
         )
         seen = self.run_goal("plan_hotwire", long, cancel_after_feedback=True)
         r = seen.pop("result")
@@ -551,8 +585,9 @@ class Peer:
             raise RuntimeError("no program from emit_program to run")
         commands = self.client(SendMachineCommand, self.name("machine_command"))
 
-        def command(kind):
-            request = SendMachineCommand.Request(command=MachineCommand(machine_id="", command=kind))
+        # An empty machine_id addresses every machine for hold and abort only; a resume names it.
+        def command(kind, machine_id=""):
+            request = SendMachineCommand.Request(command=MachineCommand(machine_id=machine_id, command=kind))
             answer = self.wait.future(commands.call_async(request), "machine_command")
             return {"success": answer.success, "message": answer.message}
 
@@ -564,7 +599,7 @@ class Peer:
             # GRBL takes a cycle start only once the hold is complete (Hold:0, stopped); the
             # status says HOLD from the start of the deceleration, so wait until it stands still.
             self.wait.until(self._stopped_in_hold, "the machine standing still in HOLD")
-            resume = command(MachineCommand.COMMAND_RESUME)
+            resume = command(MachineCommand.COMMAND_RESUME, "cutter")
             emit("execute", case="hold", hold=hold, resume=resume, feedback=len(feedback))
             return {"hold": hold, "saw_hold": bool(held), "resume": resume}
 
@@ -974,6 +1009,29 @@ class Peer:
             now_ns=time.time_ns(),
         )
 
+    def check_heaters(self):
+        hotend = "marlin_sim/temperature/hotend"
+        t = self.wait.until(lambda: (self.received(hotend) or [None])[-1], "a hotend temperature")
+        emit(
+            "heaters",
+            view="temperature",
+            count=len(self.received(hotend)),
+            frame_id=t.header.frame_id,
+            stamp_ns=_ns(t.header.stamp),
+            temperature=t.temperature,
+            variance=t.variance,
+        )
+
+        def printer_status():
+            for array in reversed(self.received("/diagnostics")):
+                for d in array.status:
+                    if d.hardware_id == "marlin-sim" and any(kv.key.startswith("heater/") for kv in d.values):
+                        return d
+            return None
+
+        d = self.wait.until(printer_status, "the printer's heaters in /diagnostics")
+        emit("heaters", view="diagnostics", name=d.name, values={kv.key: kv.value for kv in d.values})
+
     def check_type_hash(self):
         """Every endpoint of a cell node (namespaces --ns and --sim-ns) on any topic: the
         namespace's topics, action topics and service request/reply topics (raw DDS names: rt/,
@@ -1116,6 +1174,8 @@ CHECKS = [
     "rosout",
     "type_hash",
 ]
+# Checks that run only when --only names them.
+EXTRA_CHECKS = ["heaters"]
 
 
 def main():
@@ -1127,7 +1187,7 @@ def main():
     parser.add_argument("--slice-cancel-layer-mm", type=float, default=0.2)
     parser.add_argument("--sim-ns", default="/sim", help="namespace of the emitter on simulated time")
     parser.add_argument("--sim-time-s", type=float, default=1_000_000_000.0, help="the peer's /clock start [s]")
-    parser.add_argument("--only", nargs="*", choices=CHECKS, help="run only these checks")
+    parser.add_argument("--only", nargs="*", choices=CHECKS + EXTRA_CHECKS, help="run only these checks")
     args = parser.parse_args()
     rclpy.init()
     peer = Peer(args)

@@ -65,6 +65,12 @@ pub(super) fn parse(text: &str, file: &str) -> Result<Parsed, AirfoilError> {
                 found: tokens.len(),
             });
         }
+        if rows.len() == super::MAX_POINTS {
+            return Err(AirfoilError::TooManyPoints {
+                file: file.into(),
+                line,
+            });
+        }
         let x = coordinate(tokens[0], "x", file, line)?;
         let y = coordinate(tokens[1], "y", file, line)?;
         rows.push(Row { line, x, y, block });
@@ -168,6 +174,33 @@ fn lednicer_points(rows: &[Row], file: &str) -> Result<Vec<Point2<f64>>, Airfoil
 
 #[cfg(test)]
 mod tests {
+
+    /// A named file of `n` coordinate lines.
+    fn lines(n: usize) -> String {
+        let mut t = String::from("MANY\n");
+        for i in 0..n {
+            t.push_str(&format!(
+                "{} {}\n",
+                i as f64 / n as f64,
+                (i % 7) as f64 * 1e-3
+            ));
+        }
+        t
+    }
+
+    #[test]
+    fn coordinate_lines_are_capped() {
+        let ok = super::parse(&lines(crate::MAX_POINTS), "ok.dat").unwrap();
+        assert_eq!(ok.points.len(), crate::MAX_POINTS);
+        let e = super::parse(&lines(crate::MAX_POINTS + 1), "big.dat")
+            .err()
+            .unwrap();
+        assert_eq!(
+            e.to_string(),
+            "big.dat:20002: more than 20000 coordinate lines: the limit is 20000 points (MAX_POINTS)"
+        );
+    }
+
     use super::super::{Airfoil, AirfoilError};
 
     const SELIG: &str =

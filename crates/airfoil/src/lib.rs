@@ -35,6 +35,11 @@ pub use surface::SurfaceFunctions;
 /// Fewest distinct points a section may have.
 pub const MIN_POINTS: usize = 5;
 
+/// Most coordinate lines a `.dat` file may hold (issue 23: every size from a file has a
+/// limit). UIUC files hold 35–400 points, high-resolution exports ~2 000; the limit is 10×
+/// that, far above what the resampling and the surface functions need.
+pub const MAX_POINTS: usize = 20_000;
+
 /// What went wrong reading or building an airfoil. `file` is the source name given to the
 /// parser (or the airfoil's name for in-memory geometry); `line` is 1-based.
 #[derive(Debug, thiserror::Error)]
@@ -116,6 +121,14 @@ pub enum AirfoilError {
         found_upper: usize,
         /// Lower-surface points found.
         found_lower: usize,
+    },
+    /// More than [`MAX_POINTS`] coordinate lines.
+    #[error("{file}:{line}: more than {MAX_POINTS} coordinate lines: the limit is {MAX_POINTS} points (MAX_POINTS)")]
+    TooManyPoints {
+        /// Source name.
+        file: String,
+        /// 1-based line of the first coordinate over the limit.
+        line: usize,
     },
     /// Fewer than [`MIN_POINTS`] distinct points.
     #[error("{file}:{line}: only {found} distinct points, need at least {MIN_POINTS}")]

@@ -9,6 +9,8 @@
 //! - [`BagInfo`] summarises a bag (what `ros2 bag info` prints, via `Display`) and
 //!   [`BagReader`] iterates its messages in log-time order across split files.
 //! - [`repair()`] makes a bag whose writer was killed readable again.
+//! - [`ChunkLimits`] caps what one chunk may decompress to (a hostile file cannot exhaust
+//!   memory).
 //!
 //! Every error names the file it concerns, and the byte offset when one is known; corrupt or
 //! truncated input is an error, never a panic.
@@ -17,13 +19,16 @@
 
 use std::path::{Path, PathBuf};
 
+pub mod limits;
 pub mod metadata;
 pub mod qos;
 pub mod reader;
+mod record_lengths;
 pub mod repair;
 mod scan;
 pub mod writer;
 
+pub use limits::ChunkLimits;
 pub use metadata::{BagMetadata, MetadataFile};
 pub use qos::QosProfile;
 pub use reader::{BagInfo, BagMessage, BagReader, FileInfo, TopicInfo};

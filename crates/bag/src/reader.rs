@@ -22,6 +22,7 @@ use std::sync::Arc;
 use cell_msgs::RosMessage;
 use mcap::records::op;
 
+use crate::limits::ChunkLimits;
 use crate::metadata::{self, MetadataFile};
 use crate::scan::{self, Item, ScanError, MAGIC};
 use crate::writer::{QOS_KEY, TYPE_HASH_KEY};
@@ -201,6 +202,7 @@ pub struct BagReader {
     info: BagInfo,
     files: Vec<BagFile>,
     chunks: Vec<ChunkRef>,
+    limits: ChunkLimits,
 }
 
 impl BagReader {
@@ -223,6 +225,17 @@ impl BagReader {
                 offset: file.1,
                 reason: "summary has no statistics record".into(),
             })?;
+            // Durations are end − start; a file that says otherwise is refused, not trusted.
+            if stats.message_count > 0 && stats.message_start_time > stats.message_end_time {
+                return Err(BagError::Corrupt {
+                    path: p.clone(),
+                    offset: file.1,
+                    reason: format!(
+                        "statistics record: message_start_time {} is after message_end_time {}",
+                        stats.message_start_time, stats.message_end_time
+                    ),
+                });
+            }
             let mut channels = HashMap::new();
             let mut ids: Vec<&u16> = summary.channels.keys().collect();
             ids.sort();
@@ -291,7 +304,14 @@ impl BagReader {
             info,
             files,
             chunks,
+            limits: ChunkLimits::default(),
         })
+    }
+
+    /// Holds every chunk read from now on to `limits` instead of [`ChunkLimits::default`].
+    pub fn with_limits(mut self, limits: ChunkLimits) -> Self {
+        self.limits = limits;
+        self
     }
 
     /// The bag's summary.
@@ -353,7 +373,7 @@ impl BagReader {
                 "chunk index does not point at a chunk".into(),
             ));
         };
-        let records = scan::decompress(&header, data, offset).map_err(scan_err)?;
+        let records = scan::decompress(&header, data, offset, &self.limits).map_err(scan_err)?;
         let mut out = Vec::new();
         for item in scan::chunk_items(&records, offset).map_err(scan_err)? {
             if let Item::Message { header, data } = item {
@@ -404,6 +424,7 @@ pub(crate) fn open_summary(path: &Path) -> Result<((File, u64), mcap::Summary)> 
             reason: format!("no closing magic at byte {}", len.saturating_sub(8)),
         });
     }
+    check_summary_lengths(&mut file, path, len)?;
     let mut reader = mcap::sans_io::SummaryReader::new_with_options(
         mcap::sans_io::SummaryReaderOptions::default().with_file_size(len),
     );
@@ -432,6 +453,87 @@ pub(crate) fn open_summary(path: &Path) -> Result<((File, u64), mcap::Summary)> 
         reason: "the footer points at no summary".into(),
     })?;
     Ok(((file, len), summary))
+}
+
+/// Frames each record of the summary section (from the footer's `summary_start` to the footer)
+/// and holds its length prefixes to its body ([`crate::record_lengths`]) before `mcap`'s
+/// summary reader parses it: that reader allocates whatever a string claims. A footer that
+/// does not parse is left to the summary reader to report.
+fn check_summary_lengths(file: &mut File, path: &Path, len: u64) -> Result<()> {
+    // Footer record (opcode, length, summary_start, summary_offset_start, CRC), then the magic.
+    const FOOTER_AND_MAGIC: u64 = 1 + 8 + 8 + 8 + 4 + 8;
+    let Some(footer_at) = len.checked_sub(FOOTER_AND_MAGIC) else {
+        return Ok(());
+    };
+    let mut footer = [0u8; 17];
+    file.seek(SeekFrom::Start(footer_at))
+        .and_then(|_| file.read_exact(&mut footer))
+        .map_err(|e| BagError::io(path, e))?;
+    let summary_start = u64::from_le_bytes(footer[9..17].try_into().unwrap_or_default());
+    if footer[0] != op::FOOTER || summary_start < MAGIC.len() as u64 || summary_start > footer_at {
+        return Ok(());
+    }
+    let corrupt = |offset: u64, reason: String| BagError::Corrupt {
+        path: path.to_owned(),
+        offset,
+        reason,
+    };
+    file.seek(SeekFrom::Start(summary_start))
+        .map_err(|e| BagError::io(path, e))?;
+    let mut section = std::io::BufReader::new(&mut *file).take(footer_at - summary_start);
+    let mut offset = summary_start;
+    let mut head = [0u8; 9];
+    let mut body = Vec::new();
+    while offset < footer_at {
+        section
+            .read_exact(&mut head)
+            .map_err(|_| corrupt(offset, "summary record header runs into the footer".into()))?;
+        // The spec puts only schema, channel, index and statistics records (then summary
+        // offsets) in the summary; a chunk there would be decompressed by mcap's summary
+        // reader, which a fuzzed file made spin for ever (crates/fuzz/corpus/bag_reader).
+        if matches!(
+            head[0],
+            op::HEADER
+                | op::FOOTER
+                | op::MESSAGE
+                | op::CHUNK
+                | op::MESSAGE_INDEX
+                | op::ATTACHMENT
+                | op::METADATA
+                | op::DATA_END
+        ) {
+            return Err(corrupt(
+                offset,
+                format!(
+                    "record opcode {:#04x} does not belong in the summary section",
+                    head[0]
+                ),
+            ));
+        }
+        let body_len = u64::from_le_bytes(head[1..9].try_into().unwrap_or_default());
+        let left = footer_at - offset - 9;
+        if body_len > left {
+            return Err(corrupt(
+                offset,
+                format!(
+                    "summary record (opcode {:#04x}) of {body_len} bytes runs past the summary \
+                     section ({left} bytes left before the footer)",
+                    head[0]
+                ),
+            ));
+        }
+        body.clear();
+        body.resize(body_len as usize, 0);
+        section
+            .read_exact(&mut body)
+            .map_err(|e| BagError::io(path, e))?;
+        crate::record_lengths::check(head[0], &body)
+            .map_err(|e| corrupt(offset, format!("record opcode {:#04x}: {e}", head[0])))?;
+        offset += 9 + body_len;
+    }
+    file.seek(SeekFrom::Start(0))
+        .map_err(|e| BagError::io(path, e))?;
+    Ok(())
 }
 
 /// A message waiting in the merge, ordered by (log time, read order), smallest first.

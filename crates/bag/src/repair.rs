@@ -16,6 +16,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::limits::ChunkLimits;
 use crate::metadata::{self, FileStats, TopicStats};
 use crate::reader::{self, BagReader};
 use crate::scan::{self, Item, MAGIC};
@@ -139,8 +140,7 @@ fn repair_file(path: &Path) -> Result<FileRepair> {
     // The header comes first; keep its profile.
     if let Ok(Some(framed)) = scan::frame_at(&bytes, pos, 0) {
         if framed.op == mcap::records::op::HEADER {
-            if let Ok(mcap::records::Record::Header(h)) = mcap::parse_record(framed.op, framed.body)
-            {
+            if let Ok(mcap::records::Record::Header(h)) = scan::parse_record(&framed) {
                 profile = h.profile;
             }
             pos += scan::framed_len(&framed);
@@ -169,7 +169,7 @@ fn repair_file(path: &Path) -> Result<FileRepair> {
         let records;
         let items = match item {
             Item::Chunk { header, data } => {
-                match scan::decompress(&header, data, framed.offset) {
+                match scan::decompress(&header, data, framed.offset, &ChunkLimits::default()) {
                     Ok(r) => records = r,
                     Err(e) => break (e.offset, e.reason),
                 }

@@ -9,6 +9,9 @@ use std::io::Read;
 
 use mcap::records::{op, ChunkHeader, MessageHeader, Record};
 
+use crate::limits::ChunkLimits;
+use crate::record_lengths;
+
 /// MCAP magic, at the start and at the end of a file.
 pub(crate) const MAGIC: [u8; 8] = [0x89, b'M', b'C', b'A', b'P', 0x30, b'\r', b'\n'];
 
@@ -113,8 +116,7 @@ pub(crate) fn parse<'a>(f: &Framed<'a>) -> Result<Item<'a>, ScanError> {
             _ => Item::Other,
         });
     }
-    let record = mcap::parse_record(f.op, f.body)
-        .map_err(|e| ScanError::corrupt(f.offset, format!("record opcode {:#04x}: {e}", f.op)))?;
+    let record = parse_record(f)?;
     Ok(match record {
         Record::Schema { header, data } => Item::Schema {
             id: header.id,
@@ -135,6 +137,16 @@ pub(crate) fn parse<'a>(f: &Framed<'a>) -> Result<Item<'a>, ScanError> {
     })
 }
 
+/// `mcap::parse_record` over a framed record, once [`record_lengths::check`] has held every
+/// length prefix in it to the body (`mcap` allocates a string's claimed length before reading).
+pub(crate) fn parse_record<'a>(f: &Framed<'a>) -> Result<Record<'a>, ScanError> {
+    let corrupt = |e: &dyn std::fmt::Display| {
+        ScanError::corrupt(f.offset, format!("record opcode {:#04x}: {e}", f.op))
+    };
+    record_lengths::check(f.op, f.body).map_err(|e| corrupt(&e))?;
+    mcap::parse_record(f.op, f.body).map_err(|e| corrupt(&e))
+}
+
 /// `parse_record` borrows payloads from its input; get the slice back with our lifetime.
 fn borrowed<'a>(data: std::borrow::Cow<'_, [u8]>, f: &Framed<'a>) -> Result<&'a [u8], ScanError> {
     // Locate the payload in the body by address: no copy, no unsafe.
@@ -145,18 +157,25 @@ fn borrowed<'a>(data: std::borrow::Cow<'_, [u8]>, f: &Framed<'a>) -> Result<&'a 
 }
 
 /// Decompresses and checks a chunk; `offset` is the chunk record's file offset (for errors).
+/// The declared size is first held to `limits` ([`ChunkLimits`]), so nothing is decompressed
+/// for a chunk that claims too much.
 pub(crate) fn decompress(
     header: &ChunkHeader,
     data: &[u8],
     offset: u64,
+    limits: &ChunkLimits,
 ) -> Result<Vec<u8>, ScanError> {
     let size = header.uncompressed_size;
+    limits
+        .check(size, data.len() as u64)
+        .map_err(|reason| ScanError::corrupt(offset, reason))?;
     let out = match header.compression.as_str() {
         "" => data.to_vec(),
         "zstd" => {
             let mut out = Vec::new();
             // Bounded by what the frame really holds and by the declared size (+1 to detect
-            // overlong output), so a corrupt size cannot make us allocate it up front.
+            // overlong output, which `limits` has capped), so a corrupt size cannot make us
+            // allocate it up front.
             zstd::stream::read::Decoder::with_buffer(data)
                 .and_then(|d| d.take(size.saturating_add(1)).read_to_end(&mut out))
                 .map_err(|e| ScanError::corrupt(offset, format!("chunk zstd data: {e}")))?;

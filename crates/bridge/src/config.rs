@@ -23,6 +23,8 @@
 //! An ABB robot is a [`cell_rws::ControllerConfig`] file with `protocol: rws`; its credentials
 //! come from an environment variable or a file, never from the YAML.
 //!
+//! A Marlin printer is a `protocol: marlin` file ([`crate::marlin::config`]).
+//!
 //! Every error names the file and, where known, the line and the dotted field.
 
 use std::path::{Path, PathBuf};
@@ -60,6 +62,10 @@ pub const EMBEDDED_CONTROLLERS: &[(&str, &str)] = &[
         "abb-irb2600-waam-sim",
         include_str!("../../../config/controllers/abb-irb2600-waam-sim.yaml"),
     ),
+    (
+        "marlin-sim",
+        include_str!("../../../config/controllers/marlin-sim.yaml"),
+    ),
 ];
 
 /// A controller the bridge drives.
@@ -69,6 +75,8 @@ pub enum ControllerSpec {
     Grbl(GrblControllerConfig),
     /// ABB Robot Web Services.
     Rws(cell_rws::ControllerConfig),
+    /// A Marlin 2 printer (or the in-process Marlin simulator).
+    Marlin(crate::marlin::MarlinControllerConfig),
 }
 
 impl ControllerSpec {
@@ -77,6 +85,7 @@ impl ControllerSpec {
         match self {
             ControllerSpec::Grbl(g) => &g.id,
             ControllerSpec::Rws(r) => &r.id,
+            ControllerSpec::Marlin(m) => &m.id,
         }
     }
 
@@ -146,6 +155,12 @@ impl ControllerSpec {
                 cfg.check(file)?;
                 Ok(ControllerSpec::Grbl(cfg))
             }
+            Some("marlin") => {
+                let cfg: crate::marlin::MarlinControllerConfig =
+                    cell_config::from_yaml_str(text, file)?;
+                cfg.check(file)?;
+                Ok(ControllerSpec::Marlin(cfg))
+            }
             Some("rws") => {
                 let mut cfg = cell_rws::ControllerConfig::from_yaml_str(text, file)
                     .map_err(ControllerFileError::Rws)?;
@@ -162,12 +177,35 @@ impl ControllerSpec {
                 file: file.into(),
                 field: "protocol".into(),
                 reason: match other {
-                    Some(p) => format!("{p:?}: expected `grbl` or `rws`").into(),
-                    None => "missing: say `protocol: grbl` or `protocol: rws`".into(),
+                    Some(p) => format!("{p:?}: expected `grbl`, `marlin` or `rws`").into(),
+                    None => "missing: say `protocol: grbl`, `protocol: marlin` or `protocol: rws`"
+                        .into(),
                 },
             }),
         }
     }
+}
+
+/// `file`'s `field` is wrong for `reason`.
+pub(crate) fn invalid(file: &str, field: &str, reason: Problem) -> ControllerFileError {
+    ControllerFileError::Invalid {
+        file: file.into(),
+        field: field.into(),
+        reason,
+    }
+}
+
+/// `value` of `file`'s `field` within `allowed`, in `unit`.
+pub(crate) fn in_range(
+    file: &str,
+    field: &str,
+    value: f64,
+    allowed: Allowed,
+    unit: &'static str,
+) -> Result<(), ControllerFileError> {
+    allowed
+        .check(value, unit)
+        .map_err(|e| invalid(file, field, e.into()))
 }
 
 /// Errors reading a controller file.
@@ -209,24 +247,41 @@ pub enum ControllerFileError {
     Rws(cell_rws::config::ConfigError),
 }
 
-/// Where a GRBL controller is reached.
+/// Where a serial-protocol controller is reached: a GRBL controller (`S` =
+/// [`SimulatorConfig`]) or a Marlin printer (`S` = the Marlin simulator's settings).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
-pub enum EndpointConfig {
-    /// TCP/telnet `host:port`.
+pub enum EndpointConfig<S = SimulatorConfig> {
+    /// TCP/telnet `host:port` (a serial-to-network bridge for a printer).
     Tcp(String),
     /// A serial port.
     Serial {
         /// Device path.
         path: PathBuf,
-        /// Baud rate.
+        /// Baud rate (Marlin boards: 250 000 on many AVR ones, 115 200 on most others).
         #[serde(default = "default_baud")]
         baud: u32,
     },
     /// A pseudo-terminal device path.
     Pty(PathBuf),
-    /// The in-repo GRBL 1.1 simulator, started by the bridge and reached over loopback TCP.
-    Simulator(SimulatorConfig),
+    /// The in-repo simulator of the protocol, started by the bridge and reached over loopback
+    /// TCP.
+    Simulator(S),
+}
+
+impl<S> EndpointConfig<S> {
+    /// The endpoint, unless it is the simulator (which has no address until it is started).
+    pub fn real_endpoint(&self) -> Option<Endpoint> {
+        match self {
+            EndpointConfig::Tcp(a) => Some(Endpoint::Tcp(a.clone())),
+            EndpointConfig::Serial { path, baud } => Some(Endpoint::Serial {
+                path: path.clone(),
+                baud: *baud,
+            }),
+            EndpointConfig::Pty(p) => Some(Endpoint::Pty(p.clone())),
+            EndpointConfig::Simulator(_) => None,
+        }
+    }
 }
 
 fn default_baud() -> u32 {
@@ -428,18 +483,8 @@ fn default_status_period() -> f64 {
 
 impl GrblControllerConfig {
     fn check(&self, file: &str) -> Result<(), ControllerFileError> {
-        let invalid = |field: &str, reason: Problem| ControllerFileError::Invalid {
-            file: file.into(),
-            field: field.into(),
-            reason,
-        };
-        let in_range = |field: &str, value: f64, allowed: Allowed, unit: &'static str| {
-            allowed
-                .check(value, unit)
-                .map_err(|e| invalid(field, e.into()))
-        };
         if self.id.trim().is_empty() {
-            return Err(invalid("id", "empty".into()));
+            return Err(invalid(file, "id", "empty".into()));
         }
         if let Some(bad) = self
             .allowed_commands
@@ -447,6 +492,7 @@ impl GrblControllerConfig {
             .find(|c| !cell_grbl::program::is_controller_command(c.trim()))
         {
             return Err(invalid(
+                file,
                 "allowed_commands",
                 format!("{bad:?} is not a controller command (`$…` or `[ESP…]`)").into(),
             ));
@@ -458,6 +504,7 @@ impl GrblControllerConfig {
             || (1..axes.len()).any(|i| axes[..i].contains(&axes[i]))
         {
             return Err(invalid(
+                file,
                 "axes",
                 format!(
                     "{:?}: 1 to 6 distinct letters of XYZABCUVW, in report order",
@@ -468,27 +515,31 @@ impl GrblControllerConfig {
         }
         if !self.machine_profile.is_empty() {
             let profile = cell_profiles::MachineProfile::resolve(&self.machine_profile)
-                .map_err(|e| invalid("machine_profile", e.to_string().into()))?;
+                .map_err(|e| invalid(file, "machine_profile", e.to_string().into()))?;
             if let Some(missing) = axes.iter().find(|a| !profile.axes.contains_key(a)) {
                 return Err(invalid(
+                    file,
                     "axes",
                     format!("{missing} is not an axis of machine {}", profile.name).into(),
                 ));
             }
         }
         in_range(
+            file,
             "rx_buffer_bytes",
             self.rx_buffer_bytes as f64,
             Allowed::closed(16.0, 65_536.0).whole(),
             "bytes",
         )?;
         in_range(
+            file,
             "command_timeout_s",
             self.command_timeout_s,
             Allowed::closed(0.5, 120.0),
             "s",
         )?;
         in_range(
+            file,
             "resume_timeout_s",
             self.resume_timeout_s,
             Allowed::closed(0.5, 120.0),
@@ -496,6 +547,7 @@ impl GrblControllerConfig {
         )?;
         // GRBL advises at most 5 Hz of `?`; faster than 50 Hz only loads the link.
         in_range(
+            file,
             "status_period_s",
             self.status_period_s,
             Allowed::closed(0.02, 1.0),
@@ -504,12 +556,14 @@ impl GrblControllerConfig {
         let r = &self.reconnect;
         if r.attempts == 0 || !(r.delay_s.is_finite() && (0.0..=60.0).contains(&r.delay_s)) {
             return Err(invalid(
+                file,
                 "reconnect",
                 "attempts >= 1 and delay_s in 0..60 s".into(),
             ));
         }
         match &self.endpoint {
             EndpointConfig::Serial { baud, .. } => in_range(
+                file,
                 "endpoint.serial.baud",
                 f64::from(*baud),
                 Allowed::at_least(1.0).whole(),
@@ -517,12 +571,14 @@ impl GrblControllerConfig {
             )?,
             EndpointConfig::Simulator(s) => {
                 in_range(
+                    file,
                     "endpoint.simulator.time_scale",
                     s.time_scale,
                     Allowed::between(Bound::Exclusive(0.0), Bound::Inclusive(1000.0)),
                     "",
                 )?;
                 in_range(
+                    file,
                     "endpoint.simulator.rapid_mm_min",
                     s.rapid_mm_min,
                     Allowed::POSITIVE,
@@ -541,6 +597,7 @@ impl GrblControllerConfig {
             )
         {
             return Err(invalid(
+                file,
                 "resume_after_link_drop",
                 "`auto` needs a controller that keeps its state over a reconnect (TCP, e.g. \
                  FluidNC, or the simulator); a serial or pty board resets when its port is \
@@ -583,15 +640,7 @@ impl GrblControllerConfig {
 
     /// The endpoint, unless it is the simulator (which has no address until it is started).
     pub fn endpoint(&self) -> Option<Endpoint> {
-        match &self.endpoint {
-            EndpointConfig::Tcp(a) => Some(Endpoint::Tcp(a.clone())),
-            EndpointConfig::Serial { path, baud } => Some(Endpoint::Serial {
-                path: path.clone(),
-                baud: *baud,
-            }),
-            EndpointConfig::Pty(p) => Some(Endpoint::Pty(p.clone())),
-            EndpointConfig::Simulator(_) => None,
-        }
+        self.endpoint.real_endpoint()
     }
 }
 

@@ -7,7 +7,19 @@ use cell_msgs::{ExecuteProgramResult, MachineCommand, MachineProgram, MachineSta
 
 use crate::config::ControllerSpec;
 use crate::grbl::GrblController;
+use crate::marlin::MarlinController;
 use crate::rws::RwsController;
+
+/// One heater's reading, °C.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeaterStatus {
+    /// `hotend` or `bed`.
+    pub name: &'static str,
+    /// Measured temperature.
+    pub current_c: f64,
+    /// Target (0: off).
+    pub target_c: f64,
+}
 
 /// Locks a mutex, taking it over if a panicking thread poisoned it: every value behind these
 /// locks is replaced whole, so none can be left half-written.
@@ -111,6 +123,8 @@ pub enum Controller {
     Grbl(Arc<GrblController>),
     /// ABB RWS.
     Rws(Arc<RwsController>),
+    /// Marlin.
+    Marlin(Arc<MarlinController>),
 }
 
 impl Controller {
@@ -122,6 +136,7 @@ impl Controller {
         Ok(match spec {
             ControllerSpec::Grbl(g) => Controller::Grbl(GrblController::start(g).await?),
             ControllerSpec::Rws(r) => Controller::Rws(RwsController::start(r).await?),
+            ControllerSpec::Marlin(m) => Controller::Marlin(MarlinController::start(m).await?),
         })
     }
 
@@ -130,6 +145,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => &g.config().id,
             Controller::Rws(r) => &r.config().id,
+            Controller::Marlin(m) => &m.config().id,
         }
     }
 
@@ -138,6 +154,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => &g.config().machine_profile,
             Controller::Rws(_) => "",
+            Controller::Marlin(m) => &m.config().machine_profile,
         }
     }
 
@@ -146,6 +163,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => Duration::from_secs_f64(g.config().status_period_s),
             Controller::Rws(r) => r.poll_period(),
+            Controller::Marlin(m) => Duration::from_secs_f64(m.config().status_period_s),
         }
     }
 
@@ -159,6 +177,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => g.prepare(program, start_line).map(|_| ()),
             Controller::Rws(r) => r.refuse_reason(program, start_line).map_or(Ok(()), Err),
+            Controller::Marlin(m) => m.prepare(program, start_line).map(|_| ()),
         }
     }
 
@@ -167,6 +186,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => g.execute(program, start_line).await,
             Controller::Rws(r) => r.execute(program, start_line).await,
+            Controller::Marlin(m) => m.execute(program, start_line).await,
         }
     }
 
@@ -178,6 +198,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => g.command(command).await,
             Controller::Rws(r) => r.command(command).await,
+            Controller::Marlin(m) => m.command(command).await,
         }
     }
 
@@ -187,6 +208,7 @@ impl Controller {
     pub async fn stop_for_shutdown(&self, budget: Duration) -> String {
         match self {
             Controller::Grbl(g) => g.stop_for_shutdown(budget).await,
+            Controller::Marlin(m) => m.stop_for_shutdown(budget).await,
             Controller::Rws(r) => {
                 let state = r.status().state;
                 if !matches!(
@@ -212,11 +234,22 @@ impl Controller {
         }
     }
 
+    /// The heaters' last reading (a Marlin printer's `M105`/`ok T:` reports; none for GRBL and
+    /// ABB controllers). `MachineStatus` has no temperature fields, so the node sends these
+    /// beside the status: to Rerun, and as `sensor_msgs/Temperature` and `/diagnostics` values.
+    pub fn heaters(&self) -> Vec<HeaterStatus> {
+        match self {
+            Controller::Marlin(m) => m.heaters(),
+            Controller::Grbl(_) | Controller::Rws(_) => Vec::new(),
+        }
+    }
+
     /// The state now (header left for the node to stamp).
     pub fn status(&self) -> MachineStatus {
         match self {
             Controller::Grbl(g) => g.status(),
             Controller::Rws(r) => r.status(),
+            Controller::Marlin(m) => m.status(),
         }
     }
 
@@ -225,6 +258,7 @@ impl Controller {
         match self {
             Controller::Grbl(g) => g.job().map_or(0.0, |j| j.percent_done()),
             Controller::Rws(r) => r.job().map_or(0.0, |j| j.percent_done()),
+            Controller::Marlin(m) => m.job().map_or(0.0, |j| j.percent_done()),
         }
     }
 }

@@ -136,30 +136,7 @@ impl GrblController {
 
     /// Why a program cannot run here, before anything is sent.
     fn refuse_reason(&self, program: &MachineProgram) -> Option<String> {
-        if program.dialect != "grbl" {
-            return Some(format!(
-                "controller {} speaks GRBL; the program is in the {:?} dialect (emit it for a grbl profile)",
-                self.cfg.id, program.dialect
-            ));
-        }
-        if !self.cfg.machine_profile.is_empty()
-            && !program.machine_profile.is_empty()
-            && !program
-                .machine_profile
-                .eq_ignore_ascii_case(&self.cfg.machine_profile)
-        {
-            return Some(format!(
-                "controller {} runs machine profile {}; the program was emitted for {}",
-                self.cfg.id, self.cfg.machine_profile, program.machine_profile
-            ));
-        }
-        if program.files.len() != 1 {
-            return Some(format!(
-                "a G-code program is one file; this one has {}",
-                program.files.len()
-            ));
-        }
-        None
+        crate::program_fit::gcode_refusal(&self.cfg.id, "grbl", &self.cfg.machine_profile, program)
     }
 
     /// The lines to send and the original line to start from, or why `program` cannot run

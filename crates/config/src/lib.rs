@@ -29,14 +29,19 @@
 //! assert!(e.to_string().starts_with("m.yaml:2: field `axis.travel_mm`: invalid type"), "{e}");
 //! ```
 //!
+//! A node answering a remote caller uses [`without_content`] and
+//! [`ParseError::without_content`]: the same place and kind of problem, no value from the file.
+//!
 //! The crate is pure (serde only), so every algorithm crate may use it.
 
 mod field;
 mod parse;
 mod place;
 mod range;
+mod redact;
 
 pub use field::{FieldError, Problem};
 pub use parse::{from_json_str, from_yaml_str, ParseError};
 pub use place::Place;
 pub use range::{Allowed, Bound, OutOfRange};
+pub use redact::{without_content, BLANKED};

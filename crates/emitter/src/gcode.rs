@@ -8,14 +8,20 @@
 //!
 //! **Segments.** Travel segments are rapids (G0). Cut, lead and deposit segments are feed
 //! moves (G1, or G2/G3 where arcs are fitted); zero-length moves, as where segments meet, are
-//! dropped. How power is switched depends on the profile:
+//! dropped. Marlin has no rapid: its G0 moves at the modal feed like G1 (unless built with
+//! `G0_FEEDRATE`, off in stock Marlin 2), so there every G0 carries the travel feed (the last
+//! travel segment's, before any the first one's, else the profile's `max_feed_mm_s`) when it
+//! differs from the modal F; without it a travel after a retract would crawl at the retract
+//! feed. How power is switched depends on the profile:
 //! - *continuous* (hot-wire; no `pierce`): power on with the first point's value and the
 //!   pre-heat dwell before the first feed move, off after the last;
 //! - *pierce* (sheet cutting): for each cut, power on, pierce dwell, cut, power off at the next
 //!   travel; with pierce heights the head goes to the pierce height for the pierce, down to the
 //!   cut height for the cut and up to the travel height for travel moves;
 //! - *extrusion* (printing): no power words; deposit moves carry E (below), travel moves are
-//!   wrapped in a retract and a Z-hop.
+//!   wrapped in a retract and a Z-hop; with `z_hop_only_when_crossing` the Z-hop only where
+//!   the travel crosses a deposit already made in its layer (the segments' `layer`;
+//!   `cell_geometry::travel_crosses_polylines`, the rule `cell_wing::layers::moves` plans by).
 //!
 //! **Feeds.** G94: F = feed × 60 (mm/min), written when it changes. G93 (inverse time):
 //! F = 1 / duration in minutes on every feed move, with the duration max(‖ΔXY‖, ‖ΔUV‖) / feed:
@@ -69,6 +75,7 @@ struct Pose {
     kind: u8,
     segment: usize,
     point: usize,
+    layer: u32,
 }
 
 impl Pose {
@@ -163,6 +170,12 @@ pub fn emit_with(
     let poses = poses(toolpath, profile, g)?;
     let kerf_mm = compensation::controller_kerf_mm(toolpath, profile, options)?;
     let mut w = Writer::new(profile, g);
+    if let Some(first_travel) = poses
+        .iter()
+        .find(|p| p.kind == ToolpathSegment::KIND_TRAVEL)
+    {
+        w.travel_feed_mm_s = first_travel.feed_mm_s;
+    }
     w.start(job_id);
     if let Some(kerf) = kerf_mm {
         w.select_kerf_tool(kerf);
@@ -244,6 +257,7 @@ fn poses(
                 kind: seg.kind,
                 segment: si,
                 point: pi,
+                layer: seg.layer,
             });
         }
     }
@@ -276,8 +290,13 @@ struct Writer<'a> {
     retracted: bool,
     /// Extrusion Z-hop in force (the nozzle is lifted by this much).
     lift: Option<f64>,
+    /// Extrusion: the layer of the last deposit and the XY centre lines of its deposits so far
+    /// (for `z_hop_only_when_crossing`).
+    walls: (Option<u32>, Vec<Vec<[f64; 2]>>),
     /// Controller cutter compensation, when the profile asks for it.
     comp: Option<Compensator>,
+    /// The feed G0 moves run at where G0 is not a rapid (Marlin) \[mm/s\].
+    travel_feed_mm_s: f64,
 }
 
 impl<'a> Writer<'a> {
@@ -293,7 +312,23 @@ impl<'a> Writer<'a> {
             e_position: 0.0,
             retracted: false,
             lift: None,
+            walls: (None, Vec::new()),
             comp: None,
+            travel_feed_mm_s: profile.max_feed_mm_s,
+        }
+    }
+
+    /// `G0 words`, with the travel feed on Marlin (see the module doc).
+    fn rapid_line(&mut self, words: &str) -> String {
+        if self.g.dialect != Dialect::Marlin {
+            return format!("G0 {words}");
+        }
+        let f = number(self.len(self.travel_feed_mm_s * 60.0), 3);
+        if self.last_f.as_ref() == Some(&f) {
+            format!("G0 {words}")
+        } else {
+            self.last_f = Some(f.clone());
+            format!("G0 {words} F{f}")
         }
     }
 
@@ -432,7 +467,8 @@ impl<'a> Writer<'a> {
             .at
             .as_ref()
             .map_or(0.0, |(from, _)| (p.xy() - from.xy()).norm());
-        self.push(format!("G0 {words}"));
+        let line = self.rapid_line(&words);
+        self.push(line);
         if let Some(c) = self.comp.as_mut() {
             c.rapid(self.lines.len() - 1, length_mm);
         }
@@ -499,7 +535,8 @@ impl<'a> Writer<'a> {
     ) -> Result<(), EmitError> {
         let words = self.words(p, self.default_z())?;
         let Some((from, from_words)) = self.at.clone() else {
-            self.push(format!("G0 {words}"));
+            let line = self.rapid_line(&words);
+            self.push(line);
             self.at = Some((*p, words));
             return Ok(());
         };
@@ -687,8 +724,11 @@ impl<'a> Writer<'a> {
         if self.g.pierce.is_some() {
             self.power_off();
         }
+        if let Some(last) = run.last() {
+            self.travel_feed_mm_s = last.feed_mm_s;
+        }
         if self.at.is_some() {
-            self.retract_and_lift()?;
+            self.retract_and_lift(run)?;
         }
         for p in run {
             self.rapid_to(p)?;
@@ -696,14 +736,18 @@ impl<'a> Writer<'a> {
         Ok(())
     }
 
-    /// Extrusion: retract and Z-hop before a travel move (once).
-    fn retract_and_lift(&mut self) -> Result<(), EmitError> {
+    /// Extrusion: retract and Z-hop before a travel move through `run` (once); without the
+    /// lift when the profile lifts only over deposits and the move crosses none of its layer's.
+    fn retract_and_lift(&mut self, run: &[Pose]) -> Result<(), EmitError> {
         let Some(e) = self.g.extrusion.clone() else {
             return Ok(());
         };
         if e.retract_mm > 0.0 && !self.retracted {
             self.filament(-e.retract_mm, e.retract_feed_mm_s);
             self.retracted = true;
+        }
+        if e.z_hop_only_when_crossing && !self.crosses_walls(run) {
+            return Ok(());
         }
         if e.z_hop_mm > 0.0 && self.lift.is_none() {
             if let (Some(z), Some((p, _))) = (self.g.axis_words.z, self.at.clone()) {
@@ -713,11 +757,32 @@ impl<'a> Writer<'a> {
                     .split(' ')
                     .find(|w| w.starts_with(z))
                     .unwrap_or_default();
-                self.push(format!("G0 {hop}"));
+                let line = self.rapid_line(hop);
+                self.push(line);
                 self.at = Some((p, words));
             }
         }
         Ok(())
+    }
+
+    /// Whether the travel from the current position through `run` crosses a deposit already
+    /// made in the layer of its last point.
+    fn crosses_walls(&self, run: &[Pose]) -> bool {
+        let (Some((from, _)), Some(to)) = (&self.at, run.last()) else {
+            return false;
+        };
+        let (layer, walls) = &self.walls;
+        if *layer != Some(to.layer) {
+            return false;
+        }
+        let xy = |p: &Pose| [p.primary[0], p.primary[1]];
+        let mut a = xy(from);
+        run.iter().any(|p| {
+            let b = xy(p);
+            let crosses = cell_geometry::travel_crosses_polylines(a, b, walls);
+            a = b;
+            crosses
+        })
     }
 
     /// Extrusion: back down and un-retract before depositing at `first`.
@@ -728,7 +793,9 @@ impl<'a> Writer<'a> {
         if self.lift.take().is_some() {
             if let (Some(z), Some((p, _))) = (self.g.axis_words.z, self.at.clone()) {
                 let words = self.words(&p, ZWord::Pose)?;
-                self.push(format!("G0 {z}{}", self.coord(first.primary[2])));
+                let down = format!("{z}{}", self.coord(first.primary[2]));
+                let line = self.rapid_line(&down);
+                self.push(line);
                 self.at = Some((p, words));
             }
         }
@@ -768,7 +835,7 @@ impl<'a> Writer<'a> {
                 // Continuous power (a hot wire): getting there cuts, so feed, don't rapid.
                 self.feed_to(first, None, false)?;
             } else {
-                self.retract_and_lift()?;
+                self.retract_and_lift(&run[..1])?;
                 self.rapid_to(first)?;
             }
         }
@@ -783,11 +850,18 @@ impl<'a> Writer<'a> {
     fn deposit(&mut self, run: &[Pose]) -> Result<(), EmitError> {
         let first = &run[0];
         if !self.is_at(first)? {
-            self.retract_and_lift()?;
+            self.retract_and_lift(&run[..1])?;
             self.rapid_to(first)?;
         }
         self.lower_and_prime(first)?;
-        self.moves_through(&run[1..], true)
+        self.moves_through(&run[1..], true)?;
+        let (layer, walls) = &mut self.walls;
+        if *layer != Some(first.layer) {
+            *layer = Some(first.layer);
+            walls.clear();
+        }
+        walls.push(run.iter().map(|p| [p.primary[0], p.primary[1]]).collect());
+        Ok(())
     }
 
     fn finish(mut self, job_id: &str) -> Result<String, EmitError> {

@@ -67,7 +67,7 @@ pub fn emit_program_with(
         let text = gcode::emit_with(toolpath, profile, job_id, options)?;
         let dialect = serde_dialect_name(g.dialect);
         let mut files = vec![ProgramFile {
-            name: format!("{}.ngc", file_stem(job_id)),
+            name: format!("{}.{}", file_stem(job_id), program_extension(g.dialect)),
             text,
         }];
         if let Some(kerf) = compensation::controller_kerf_mm(toolpath, profile, options)? {
@@ -95,6 +95,15 @@ pub fn emit_program_with(
         &profile.name,
         files,
     ))
+}
+
+/// The G-code file's extension: `gcode` for Marlin (its SD card lists only `.gcode`, `.gco` and
+/// `.g` files, and printer hosts look for them), `ngc` (RS274NGC) for the CNC dialects.
+pub fn program_extension(dialect: cell_profiles::Dialect) -> &'static str {
+    match dialect {
+        cell_profiles::Dialect::Marlin => "gcode",
+        _ => "ngc",
+    }
 }
 
 /// The dialect's name as profiles spell it (`grbl`, `linuxcnc`, `mach3`, `marlin`).

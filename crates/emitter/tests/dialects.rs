@@ -155,9 +155,100 @@ fn extrusion_pushes_the_filament_the_flow_needs_and_retracts_around_travel() {
             .filter(|l| l.starts_with("G1 E") && l.ends_with("F2100.000"))
             .count();
         assert_eq!(retracts, 2, "{mode}:\n{program}");
-        assert!(program.contains("G0 Z0.600\n"), "Z-hop above layer 1");
+        // The shipped profile lifts only over beads of the layer: the climb to layer 2
+        // crosses none, so no Z-hop (a profile that lifts for every travel does).
+        assert!(!program.contains("G0 Z"), "{mode}:\n{program}");
+        let always = text.replace(
+            "z_hop_only_when_crossing: true",
+            "z_hop_only_when_crossing: false",
+        );
+        let always = MachineProfile::from_yaml_str(&always, "m.yaml").unwrap();
+        let lifted = gcode::emit(&tp, &always, "rib").unwrap();
+        assert!(lifted.contains("G0 Z0.600"), "Z-hop above layer 1");
+        // Marlin's G0 runs at the modal feed: every G0 must find the travel's 120 mm/s in
+        // force, not the last retract's or deposit's.
+        let mut modal_f = None;
+        for line in program.lines() {
+            if let Some(f) = line.split(' ').find_map(|w| w.strip_prefix('F')) {
+                modal_f = Some(f.parse::<f64>().unwrap());
+            }
+            if line.starts_with("G0 ") {
+                assert_eq!(modal_f, Some(120.0 * 60.0), "{mode}: {line}\n{program}");
+            }
+        }
         assert!(program.contains("M83") == (mode == "relative"));
     }
+}
+
+/// Z-hop only over printed parts (`z_hop_only_when_crossing`): in a square skin with spars,
+/// the travel from one spar's end to the next lifts only where it crosses a spar already
+/// printed in its layer; beads of the layer below do not count.
+#[test]
+fn extrusion_lifts_only_for_travel_over_beads_of_the_layer() {
+    use cell_msgs::ToolpathSegment as S;
+    let on = |layer: u32, kind: u8, pts: &[[f64; 2]]| {
+        let z = 0.2 * f64::from(layer + 1);
+        let pts: Vec<[f64; 3]> = pts.iter().map(|q| [q[0], q[1], z]).collect();
+        let power = if kind == S::KIND_DEPOSIT { 2.7 } else { 0.0 };
+        S {
+            layer,
+            ..common::segment(kind, &pts, 30.0, power)
+        }
+    };
+    let (d, t) = (S::KIND_DEPOSIT, S::KIND_TRAVEL);
+    let skin = [
+        [100.0, 100.0],
+        [110.0, 100.0],
+        [110.0, 110.0],
+        [100.0, 110.0],
+        [100.0, 100.0],
+    ];
+    let tp = cell_msgs::Toolpath {
+        job_id: "hops".into(),
+        process: cell_msgs::Toolpath::PROCESS_EXTRUSION,
+        power_unit: cell_msgs::Toolpath::POWER_EXTRUSION_MM3_S,
+        segments: vec![
+            on(0, t, &[[0.0, 0.0], [100.0, 100.0]]),
+            on(0, d, &skin),
+            on(0, t, &[[100.0, 100.0], [105.0, 101.0]]),
+            on(0, d, &[[105.0, 101.0], [105.0, 109.0]]),
+            // Leaves the spar's end, crosses nothing.
+            on(0, t, &[[105.0, 109.0], [108.0, 109.0]]),
+            on(0, d, &[[108.0, 109.0], [108.0, 101.0]]),
+            // Crosses the spar at x = 105: lifted.
+            on(0, t, &[[108.0, 101.0], [102.0, 105.0]]),
+            on(0, d, &[[102.0, 105.0], [102.0, 109.0]]),
+            // Up a layer, then across the layer below's spars: not lifted.
+            on(1, t, &[[102.0, 109.0], [101.0, 101.0]]),
+            on(1, d, &[[101.0, 101.0], [101.0, 102.0]]),
+            on(1, t, &[[101.0, 102.0], [109.0, 105.0]]),
+            on(1, d, &[[109.0, 105.0], [109.0, 106.0]]),
+        ],
+        ..Default::default()
+    };
+    let shipped = MachineProfile::resolve("marlin-extruder").unwrap();
+    let program = gcode::emit(&tp, &shipped, "hops").unwrap();
+    let lines: Vec<&str> = program.lines().collect();
+    let hops: Vec<usize> = (0..lines.len())
+        .filter(|&i| lines[i].starts_with("G0 Z"))
+        .collect();
+    assert_eq!(hops.len(), 2, "one lift and its lower:\n{program}");
+    assert!(
+        lines[hops[0] + 1].starts_with("G0 X102.000 Y105.000"),
+        "{program}"
+    );
+    // Every travel still retracts and primes.
+    let retracts = lines.iter().filter(|l| l.starts_with("G1 E")).count();
+    assert_eq!(retracts, 2 * 5, "{program}");
+    let mut always = shipped.clone();
+    if let Some(e) = always.gcode.as_mut().and_then(|g| g.extrusion.as_mut()) {
+        e.z_hop_only_when_crossing = false;
+    }
+    let every = gcode::emit(&tp, &always, "hops").unwrap();
+    assert_eq!(
+        every.lines().filter(|l| l.starts_with("G0 Z")).count(),
+        2 * 5
+    );
 }
 
 #[test]
@@ -227,4 +318,19 @@ fn sample_toolpath_files_are_the_fixtures() {
     let program = cell_emitter::emit_program(&common::waam_wall(), &robot, "wall").unwrap();
     let names: Vec<&str> = program.files.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, ["WAAM_wall.mod", "WAAM_wall.pgf"]);
+}
+
+#[test]
+fn marlin_programs_are_gcode_files_and_cnc_programs_ngc() {
+    // Marlin's SD card lists only `.gcode`, `.gco` and `.g` files.
+    for (name, tp) in common::dialect_samples() {
+        let profile = MachineProfile::resolve(name).unwrap();
+        let program = cell_emitter::emit_program(&tp, &profile, "part").unwrap();
+        let want = if program.dialect == "marlin" {
+            "part.gcode"
+        } else {
+            "part.ngc"
+        };
+        assert_eq!(program.files[0].name, want, "{name}");
+    }
 }

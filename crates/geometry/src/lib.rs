@@ -3,7 +3,8 @@
 //! number and by winding number ([`point_in_ring_even_odd`], [`winding_number`]), point and
 //! segment distances ([`point_segment_distance`], [`segment_distance`]), polyline length and
 //! resampling ([`polyline_length`], [`resample_max_step`], [`sample_at_arc_fractions`],
-//! [`point_at_arc_length`]), bounding boxes ([`bounding_box`]).
+//! [`point_at_arc_length`]), bounding boxes ([`bounding_box`]), whether a travel crosses printed
+//! walls ([`travel_crosses_polylines`]).
 //!
 //! **One point type.** [`Point2`] and [`Point3`] are nalgebra's `Point2<f64>` and
 //! `Point3<f64>`, which the airfoil, planner, wing and emitter crates already use. The mesh,
@@ -37,6 +38,7 @@
 
 mod area;
 mod bounds;
+mod crossing;
 mod distance;
 mod inside;
 mod point;
@@ -44,6 +46,7 @@ mod polyline;
 
 pub use area::{orientation, signed_area, signed_area_from_first_vertex, Orientation};
 pub use bounds::bounding_box;
+pub use crossing::{travel_crosses_polylines, TRAVEL_END_CLEARANCE_MM};
 pub use distance::{
     closest_point_on_segment, distance_to_rings, point_segment_distance, segment_distance,
 };

@@ -126,6 +126,55 @@ pub struct Extrusion {
     /// Lift of the nozzle during travel moves, mm (0: none; needs the `z` axis word).
     #[serde(default)]
     pub z_hop_mm: f64,
+    /// Lift only for travel moves that cross a deposit already made in their layer (the
+    /// segments' `layer`; `cell_geometry::travel_crosses_polylines` on the bead centre lines),
+    /// as Cura's "Z Hop Only Over Printed Parts"; false: lift for every travel.
+    #[serde(default)]
+    pub z_hop_only_when_crossing: bool,
+    /// The firmware's motion settings, for print-time estimates (absent: the estimator's
+    /// defaults, Marlin 2's stock configuration).
+    #[serde(default)]
+    pub motion: Option<FirmwareMotion>,
+}
+
+/// A printer firmware's planner settings, as Marlin 2 names them (`Configuration.h`; M201,
+/// M203, M204, `JUNCTION_DEVIATION_MM`, `MINIMUM_PLANNER_SPEED`, `BLOCK_BUFFER_SIZE`). Axis
+/// arrays are X, Y, Z, E.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FirmwareMotion {
+    /// `DEFAULT_MAX_FEEDRATE` (M203), mm/s.
+    pub max_feedrate_mm_s: [f64; 4],
+    /// `DEFAULT_MAX_ACCELERATION` (M201), mm/s².
+    pub max_acceleration_mm_s2: [f64; 4],
+    /// `DEFAULT_ACCELERATION` (M204 P), moves that extrude, mm/s².
+    pub print_acceleration_mm_s2: f64,
+    /// `DEFAULT_RETRACT_ACCELERATION` (M204 R), E-only moves, mm/s².
+    pub retract_acceleration_mm_s2: f64,
+    /// `DEFAULT_TRAVEL_ACCELERATION` (M204 T), moves without E, mm/s².
+    pub travel_acceleration_mm_s2: f64,
+    /// `JUNCTION_DEVIATION_MM`, mm.
+    pub junction_deviation_mm: f64,
+    /// `MINIMUM_PLANNER_SPEED`, mm/s.
+    pub minimum_planner_speed_mm_s: f64,
+    /// `BLOCK_BUFFER_SIZE`, blocks (one slot stays free, so the look-ahead is one less).
+    pub block_buffer_size: usize,
+}
+
+impl FirmwareMotion {
+    /// Marlin 2's stock configuration: max feed {300, 300, 5, 25} mm/s, max acceleration
+    /// {3000, 3000, 100, 10000} mm/s², print/retract/travel acceleration 3000 mm/s², junction
+    /// deviation 0.013 mm, minimum planner speed 0.05 mm/s, 16 blocks.
+    pub const MARLIN_2_DEFAULTS: Self = Self {
+        max_feedrate_mm_s: [300.0, 300.0, 5.0, 25.0],
+        max_acceleration_mm_s2: [3000.0, 3000.0, 100.0, 10000.0],
+        print_acceleration_mm_s2: 3000.0,
+        retract_acceleration_mm_s2: 3000.0,
+        travel_acceleration_mm_s2: 3000.0,
+        junction_deviation_mm: 0.013,
+        minimum_planner_speed_mm_s: 0.05,
+        block_buffer_size: 16,
+    };
 }
 
 fn default_extruder_axis() -> char {
@@ -328,6 +377,47 @@ impl GcodeSettings {
         Allowed::POSITIVE.check_field("retract_feed_mm_s", e.retract_feed_mm_s, "mm/s")?;
         if e.z_hop_mm > 0.0 && self.axis_words.z.is_none() {
             return Err(FieldError::new("z_hop_mm", "a Z-hop needs the z axis word"));
+        }
+        if let Some(m) = &e.motion {
+            let rates =
+                (m.max_feedrate_mm_s.iter()).map(|v| ("motion.max_feedrate_mm_s", *v, "mm/s"));
+            let accels = (m.max_acceleration_mm_s2.iter())
+                .map(|v| ("motion.max_acceleration_mm_s2", *v, "mm/s²"));
+            for (name, v, unit) in rates.chain(accels).chain([
+                (
+                    "motion.print_acceleration_mm_s2",
+                    m.print_acceleration_mm_s2,
+                    "mm/s²",
+                ),
+                (
+                    "motion.retract_acceleration_mm_s2",
+                    m.retract_acceleration_mm_s2,
+                    "mm/s²",
+                ),
+                (
+                    "motion.travel_acceleration_mm_s2",
+                    m.travel_acceleration_mm_s2,
+                    "mm/s²",
+                ),
+                (
+                    "motion.junction_deviation_mm",
+                    m.junction_deviation_mm,
+                    "mm",
+                ),
+                (
+                    "motion.minimum_planner_speed_mm_s",
+                    m.minimum_planner_speed_mm_s,
+                    "mm/s",
+                ),
+            ]) {
+                Allowed::POSITIVE.check_field(name, v, unit)?;
+            }
+            if m.block_buffer_size < 2 {
+                return Err(FieldError::new(
+                    "motion.block_buffer_size",
+                    "at least 2 blocks (one stays free)",
+                ));
+            }
         }
         Ok(())
     }

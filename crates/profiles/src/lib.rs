@@ -35,8 +35,8 @@ pub use cutting::{
 pub use envelope::EnvelopeViolation;
 pub use error::ProfileError;
 pub use gcode::{
-    AxisWords, Dialect, Extrusion, ExtrusionMode, FeedMode, GcodeSettings, Pierce, PowerWords,
-    Units,
+    AxisWords, Dialect, Extrusion, ExtrusionMode, FeedMode, FirmwareMotion, GcodeSettings, Pierce,
+    PowerWords, Units,
 };
 pub use hotwire::HotwireGeometry;
 pub use machine::{MachineProfile, Process};
@@ -269,6 +269,18 @@ mod tests {
                 "filament_diameter_mm: 1.75",
                 "filament_diameter_mm: -1.75",
                 "gcode.extrusion.filament_diameter_mm",
+            ),
+            (
+                "marlin-extruder",
+                "junction_deviation_mm: 0.013",
+                "junction_deviation_mm: 0",
+                "gcode.extrusion.motion.junction_deviation_mm",
+            ),
+            (
+                "marlin-extruder",
+                "block_buffer_size: 16",
+                "block_buffer_size: 1",
+                "gcode.extrusion.motion.block_buffer_size",
             ),
             (
                 "marlin-extruder",

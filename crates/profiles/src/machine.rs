@@ -66,11 +66,7 @@ impl MachineProfile {
     /// # Errors
     /// [`ProfileError::Unknown`] for an unknown name; as [`MachineProfile::load`] for a file.
     pub fn resolve(name_or_path: &str) -> Result<Self, ProfileError> {
-        let lower = name_or_path.to_ascii_lowercase();
-        let looks_like_path = name_or_path.contains('/')
-            || name_or_path.contains(std::path::MAIN_SEPARATOR)
-            || lower.ends_with(".yaml")
-            || lower.ends_with(".yml");
+        let looks_like_path = Self::looks_like_path(name_or_path);
         if let Some((name, text)) = EMBEDDED_PROFILES
             .iter()
             .find(|(n, _)| n.eq_ignore_ascii_case(name_or_path))
@@ -84,6 +80,25 @@ impl MachineProfile {
         Err(ProfileError::Unknown {
             name: name_or_path.into(),
         })
+    }
+
+    /// A name containing a path separator or ending in `.yaml`/`.yml`: always a file.
+    fn looks_like_path(name_or_path: &str) -> bool {
+        let lower = name_or_path.to_ascii_lowercase();
+        name_or_path.contains('/')
+            || name_or_path.contains(std::path::MAIN_SEPARATOR)
+            || lower.ends_with(".yaml")
+            || lower.ends_with(".yml")
+    }
+
+    /// Whether [`MachineProfile::resolve`] reads a file for `name_or_path` (rather than an
+    /// embedded profile or an unknown name), so a caller can read it under its own rules and
+    /// use [`MachineProfile::from_yaml_str`].
+    pub fn names_a_file(name_or_path: &str) -> bool {
+        let embedded = EMBEDDED_PROFILES
+            .iter()
+            .any(|(n, _)| n.eq_ignore_ascii_case(name_or_path));
+        Self::looks_like_path(name_or_path) || (!embedded && Path::new(name_or_path).is_file())
     }
 
     /// Reads and checks a profile file.

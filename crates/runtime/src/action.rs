@@ -24,9 +24,9 @@ pub use ros2_client::action_msgs::{GoalId, GoalStatusEnum};
 ///
 /// ROS 2 services are volatile: a reply the server sends before it has matched our reply reader
 /// is lost, and the call would wait forever. Asking for a result is idempotent, so asking again
-/// is safe; each retry is logged. A retry gives up on the earlier request, and the server
-/// answers only the first request it reads once the goal has ended: so `retry_every` must be
-/// longer than the goal runs (a machine program: minutes), or its answer is missed.
+/// is safe; each retry is logged. A retry gives up on the earlier request; the server (ours as
+/// rclcpp's, [`crate::goal_server`]) answers every request for the goal, so the retry's answer
+/// arrives when the goal ends, or at once if it already has.
 pub async fn request_result<G, R, F>(
     client: &ActionClient<G, R, F>,
     goal_id: GoalId,

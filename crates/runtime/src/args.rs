@@ -22,6 +22,9 @@ pub struct RosArgs {
     pub params_files: Vec<PathBuf>,
     /// `--log-level LEVEL` (a `tracing` filter directive such as `debug` or `planner=trace`).
     pub log_level: Option<String>,
+    /// `-e`/`--enclave ENCLAVE`: the SROS2 enclave (absolute, like a namespace) whose keys the
+    /// node uses when `ROS_SECURITY_ENABLE=true` (see [`crate::security`]).
+    pub enclave: Option<String>,
 }
 
 /// A command line split into the node's own arguments and its ROS arguments.
@@ -60,9 +63,12 @@ pub enum ArgsError {
         /// Why it was refused.
         reason: String,
     },
+    /// An `--enclave` that is not absolute (rcl validates it like a namespace).
+    #[error("--ros-args: --enclave {0:?}: an enclave must be absolute (start with '/')")]
+    RelativeEnclave(String),
     /// A flag ROS 2 knows but this runtime does not support, or an unknown flag.
     #[error(
-        "--ros-args: unsupported argument {0:?} (supported: -r, -p, --params-file, --log-level)"
+        "--ros-args: unsupported argument {0:?} (supported: -r, -p, --params-file, --log-level, -e)"
     )]
     Unsupported(String),
 }
@@ -106,6 +112,13 @@ impl NodeArgs {
                 }
                 "--params-file" => out.ros.params_files.push(value_of(&arg)?.into()),
                 "--log-level" => out.ros.log_level = Some(value_of(&arg)?),
+                "-e" | "--enclave" => {
+                    let value = value_of(&arg)?;
+                    if !value.starts_with('/') {
+                        return Err(ArgsError::RelativeEnclave(value));
+                    }
+                    out.ros.enclave = Some(value);
+                }
                 other => return Err(ArgsError::Unsupported(other.to_string())),
             }
         }
@@ -199,6 +212,8 @@ mod tests {
             "config/planner.yaml",
             "--log-level",
             "debug",
+            "--enclave",
+            "/cell/planner",
             "--",
             "extra",
         ])
@@ -219,6 +234,7 @@ mod tests {
             [PathBuf::from("config/planner.yaml")]
         );
         assert_eq!(args.ros.log_level.as_deref(), Some("debug"));
+        assert_eq!(args.ros.enclave.as_deref(), Some("/cell/planner"));
     }
 
     #[test]
@@ -229,8 +245,12 @@ mod tests {
         assert!(err
             .to_string()
             .contains("-p \"rate=3\": expected NAME:=VALUE"));
-        let err = NodeArgs::parse(["--ros-args", "-e", "/enclave"]).unwrap_err();
-        assert!(err.to_string().contains("unsupported argument \"-e\""));
+        let err = NodeArgs::parse(["--ros-args", "--log-config-file", "x.conf"]).unwrap_err();
+        assert!(err
+            .to_string()
+            .contains("unsupported argument \"--log-config-file\""));
+        let err = NodeArgs::parse(["--ros-args", "-e", "enclave"]).unwrap_err();
+        assert!(err.to_string().contains("must be absolute"), "{err}");
         let err = NodeArgs::parse(["--ros-args", "-r", "__ns:=cell"]).unwrap_err();
         assert!(err.to_string().contains("must be absolute"));
     }

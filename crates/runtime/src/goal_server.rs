@@ -2,34 +2,41 @@
 //! [`serve`] owns the ROS 2 action protocol around it.
 //!
 //! Per goal, [`serve`]:
-//! 1. names it ([`GoalHandler::job_id`]) and checks it ([`GoalHandler::validate`]); a goal that
-//!    fails the check is **rejected before it is accepted**, its reason logged (ROS 2
-//!    rejections carry no text);
+//! 1. names it ([`GoalHandler::job_id`]) and checks its sender ([`GoalHandler::admit`]) and
+//!    the goal ([`GoalHandler::validate`]); a goal that fails a check is **rejected before it
+//!    is accepted**, its reason logged (ROS 2 rejections carry no text);
 //! 2. accepts it, starts executing it and runs [`GoalHandler::run`] on its own task with a
 //!    [`GoalContext`]: feedback sent through the context is published in order, and a cancel
 //!    request for the goal is accepted and shows in [`GoalContext::is_canceled`] (and completes
 //!    [`GoalContext::canceled`]);
-//! 3. once the run ends, sends its result when the client asks for it, for up to
-//!    [`ServeOptions::result_timeout`] (a client may ask late, or before the goal ends), and
-//!    then gives up with a warning ("nobody asked for the result of …"), so a client that went
-//!    away holds nothing up.
+//! 3. once the run ends, publishes its terminal status at once and keeps its result for
+//!    [`ServeOptions::result_timeout`] (rcl's result timeout), as rclcpp and rclpy servers do:
+//!    every result request for the goal is answered, those read while it ran when it ends, later
+//!    ones at once (a client may ask twice, late, or before the goal ends). Then the result is
+//!    dropped, with a warning if nobody got it ("nobody asked for the result of …"); a request
+//!    for a dropped or unknown goal is answered with status Unknown and a default result.
 //!
 //! Goals run one at a time, in arrival order (a goal sent meanwhile waits for the running one
 //! to end before it is read), unless [`ServeOptions::concurrent`] is set. Cancel requests are
 //! answered at any time: accepted for running goals, refused for anything else (a goal not yet
-//! run, or one that ended and waits for its client). On shutdown no new goal is read; the
-//! running ones end as their handler decides (it may watch [`crate::Shutdown`]) and then
-//! [`serve`] returns.
+//! run, or one that ended). On shutdown no new goal is read; the running ones end as their
+//! handler decides (it may watch [`crate::Shutdown`]) and then [`serve`] returns (kept results
+//! go with it).
 //!
 //! A handler whose work is a blocking computation runs it with [`GoalContext::run_blocking`];
 //! one whose work is async I/O (a machine run) awaits it in [`GoalHandler::run`] directly.
 
-use std::{collections::BTreeMap, future::Future, sync::Arc, time::Duration};
+use std::{
+    collections::{BTreeMap, VecDeque},
+    future::Future,
+    sync::Arc,
+    time::Duration,
+};
 
 use anyhow::anyhow;
 use cell_msgs::RosMessage;
 use futures::{stream::FuturesUnordered, FutureExt, StreamExt};
-use tokio::sync::mpsc;
+use tokio::{sync::mpsc, time::Instant};
 use tokio_util::sync::CancellationToken;
 
 use crate::action::{AsyncActionServer, ExecutingGoalHandle, GoalEndStatus, GoalId};
@@ -39,8 +46,8 @@ use crate::node::CellNode;
 pub trait GoalHandler: Send + Sync + 'static {
     /// The action's goal message.
     type Goal: RosMessage + ros2_client::Message;
-    /// The action's result message.
-    type Result: RosMessage + ros2_client::Message;
+    /// The action's result message (its default is the answer for an unknown goal).
+    type Result: RosMessage + ros2_client::Message + Default;
     /// The action's feedback message.
     type Feedback: RosMessage + ros2_client::Message;
     /// What a valid goal becomes: everything [`GoalHandler::run`] needs.
@@ -56,6 +63,17 @@ pub trait GoalHandler: Send + Sync + 'static {
     /// # Errors
     /// Anything that makes the goal unrunnable as given.
     fn validate(&self, goal: &Self::Goal, job_id: &str) -> Result<Self::Job, String>;
+
+    /// Whether the goal's sender may send it, checked before [`GoalHandler::validate`]: `from`
+    /// is the goal request's writer GID, whose first 12 bytes name the client's participant
+    /// ([`CellNode::peer`]). A refusal rejects the goal like a failed validation. Default:
+    /// every sender.
+    ///
+    /// # Errors
+    /// Why this sender may not (one line naming the peer).
+    fn admit(&self, _goal: &Self::Goal, _job_id: &str, _from: &[u8; 16]) -> Result<(), String> {
+        Ok(())
+    }
 
     /// Runs an accepted goal to its end: its status (succeeded, aborted with the reason in the
     /// result, canceled) and result.
@@ -168,7 +186,7 @@ impl<F: Send + 'static> GoalContext<F> {
 /// How [`serve`] runs goals.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ServeOptions {
-    /// How long a finished goal's result waits for its client to ask for it.
+    /// How long a finished goal's result is kept for clients to ask for (rcl's result timeout).
     pub result_timeout: Duration,
     /// Run goals side by side, each on its own task, instead of one at a time.
     pub concurrent: bool,
@@ -223,6 +241,8 @@ pub async fn serve<H: GoalHandler>(
     let handler = Arc::new(handler);
     let mut running: BTreeMap<GoalId, Running<H::Goal>> = BTreeMap::new();
     let mut runs = FuturesUnordered::new();
+    // Ended goals by when their results are dropped (one timeout for all, so in order).
+    let mut kept: VecDeque<(Instant, GoalId, String)> = VecDeque::new();
     let mut served = 0u64;
     let mut stopping = false;
     loop {
@@ -230,6 +250,7 @@ pub async fn serve<H: GoalHandler>(
         if stopping && idle {
             return Ok(());
         }
+        let next_drop = kept.front().map(|(at, ..)| *at);
         tokio::select! {
             handle = server.receive_new_goal(), if !stopping && (idle || options.concurrent) => {
                 let handle = match handle {
@@ -245,7 +266,11 @@ pub async fn serve<H: GoalHandler>(
                 };
                 served += 1;
                 let job_id = handler.job_id(&goal, served);
-                let job = match handler.validate(&goal, &job_id) {
+                let from = handle.request_id().writer_gid.to_bytes16();
+                let checked = handler
+                    .admit(&goal, &job_id, &from)
+                    .and_then(|()| handler.validate(&goal, &job_id));
+                let job = match checked {
                     Ok(job) => job,
                     Err(why) => {
                         tracing::warn!("{action}: rejecting goal {job_id}: {why}");
@@ -305,16 +330,26 @@ pub async fn serve<H: GoalHandler>(
                 let end = ended
                     .map_err(|e| anyhow!("{action}: goal {job_id}: {e}"))
                     .and_then(|end| end)?;
-                // The result goes out once the client asks for it; do not hold up the next goal.
-                let (server, wait, action) = (server.clone(), options.result_timeout, action.to_owned());
-                tokio::spawn(async move {
-                    let send = server.send_result_response(executing, end.status, end.result);
-                    match tokio::time::timeout(wait, send).await {
-                        Ok(Ok(())) => {}
-                        Ok(Err(e)) => tracing::warn!("{action}: result {job_id}: {e:?}"),
-                        Err(_) => tracing::warn!("{action}: nobody asked for the result of {job_id}"),
-                    }
-                });
+                // Publishes the terminal status and answers the requests read so far; no wait.
+                if let Err(e) = server.send_result_response(executing, end.status, end.result).await {
+                    tracing::warn!("{action}: result {job_id}: {e:?}");
+                }
+                // An infinite timeout overflows: kept for good.
+                if let Some(at) = Instant::now().checked_add(options.result_timeout) {
+                    kept.push_back((at, goal_id, job_id));
+                }
+            }
+            // One reader of result requests for all goals: answered at once or when their goal ends.
+            asked = server.receive_result_request() => {
+                if let Err(e) = asked {
+                    tracing::warn!("{action}: result request: {e:?}");
+                }
+            }
+            _ = tokio::time::sleep_until(next_drop.unwrap_or_else(Instant::now)), if next_drop.is_some() => {
+                let (_, goal_id, job_id) = kept.pop_front().expect("a result is kept");
+                if !server.forget_result(goal_id) {
+                    tracing::warn!("{action}: nobody asked for the result of {job_id}");
+                }
             }
             _ = node.shutdown().requested(), if !stopping => stopping = true,
         }

@@ -69,6 +69,37 @@ impl CellNode {
         found.dedup_by(|a, b| a.topic == b.topic);
         found
     }
+
+    /// Readers discovered so far (our own included), with their DDS topic and ROS type names
+    /// (`rt/machine_program`, `cell_msgs/msg/MachineProgram`; a service server's request reader
+    /// is `rq/machine_commandRequest`, `cell_msgs/srv/SendMachineCommand_Request`), sorted,
+    /// one entry per pair. Readers of types not named as rosidl names them are left out.
+    pub fn discovered_readers(&self) -> Vec<DiscoveredReader> {
+        let mut found: Vec<DiscoveredReader> = self
+            .domain_participant()
+            .discovered_readers()
+            .into_iter()
+            .filter_map(|r| {
+                let data = &r.subscription_topic_data;
+                Some(DiscoveredReader {
+                    dds_topic: data.topic_name().to_string(),
+                    ros_type: ros_type_name(data.type_name())?,
+                })
+            })
+            .collect();
+        found.sort();
+        found.dedup();
+        found
+    }
+}
+
+/// A reader in the graph: see [`CellNode::discovered_readers`].
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub struct DiscoveredReader {
+    /// DDS topic name (`rt/…` for topics, `rq/…Request` for service servers).
+    pub dds_topic: String,
+    /// ROS type name, e.g. `cell_msgs/msg/MachineProgram`.
+    pub ros_type: String,
 }
 
 #[cfg(test)]

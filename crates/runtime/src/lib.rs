@@ -5,6 +5,7 @@
 //! - [`service`]: ROS 2 services (request, response) for short queries;
 //! - [`args`]: the ROS 2 command line (`--ros-args -r … -p … --params-file …`);
 //! - [`params`]: ROS 2 parameter YAML validated into typed structs;
+//! - [`data_files`]: files named in goals, confined to the data directories, capped, unquoted;
 //! - [`node`]: [`CellNode`], one DDS participant per node, `ROS_DOMAIN_ID`, interface binding;
 //! - [`qos`]: QoS presets for plans, streams and status;
 //! - [`type_hash`]: the REP-2011 type hash every endpoint announces in its DDS USER_DATA;
@@ -17,16 +18,19 @@
 pub mod action;
 pub mod args;
 pub mod clock;
+pub mod data_files;
 pub mod fastpath;
 pub mod goal_server;
 pub mod graph;
 pub mod logging;
 pub mod node;
 pub mod params;
+pub mod peers;
 pub mod pubsub;
 pub mod qos;
 pub mod rerun_sink;
 pub mod rosout;
+pub mod security;
 pub mod service;
 pub mod shutdown;
 pub mod standard_params;

@@ -266,9 +266,25 @@ impl CellNode {
             }
             Network::Only(addrs) => participant = participant.with_only_networks(addrs.clone()),
         }
-        let participant = participant
-            .build()
-            .with_context(|| format!("DDS participant on domain {}", setup.domain_id))?;
+        // SROS2: ROS_SECURITY_* and --enclave decide; a node asked to be secured never starts
+        // unsecured without saying so (crate::security).
+        let enclave =
+            crate::security::SecurityEnv::from_env().enclave_dir(ros.enclave.as_deref())?;
+        #[cfg(feature = "security")]
+        if let Some(dir) = &enclave {
+            use ros2_client::dds::rustdds::DomainParticipantSecurityConfigFiles as Files;
+            // sros2 writes the private key unencrypted, so there is no password.
+            participant =
+                participant.builtin_security(Files::with_ros_default_names(dir, String::new()));
+        }
+        let participant = participant.build().with_context(|| match &enclave {
+            Some(dir) => format!(
+                "secured DDS participant on domain {} (enclave {})",
+                setup.domain_id,
+                dir.display()
+            ),
+            None => format!("DDS participant on domain {}", setup.domain_id),
+        })?;
         // Every endpoint announces its REP-2011 type hash, as Jazzy peers expect.
         participant.set_endpoint_user_data(crate::type_hash::user_data);
         let context = Context::from_domain_participant(participant).context("ROS 2 context")?;
@@ -306,6 +322,12 @@ impl CellNode {
 
         let fast_path = match setup.fast_path {
             FastPathMode::Off => None,
+            // Shared memory is neither authenticated nor encrypted: a secured node's data
+            // stays on (secured) DDS.
+            FastPathMode::Auto if enclave.is_some() => {
+                tracing::info!("SROS2: fast path off, every message goes over secured DDS");
+                None
+            }
             FastPathMode::Auto => match FastPath::open(setup.domain_id) {
                 Ok(fp) => Some(fp),
                 Err(e) => {

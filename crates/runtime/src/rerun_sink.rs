@@ -368,6 +368,18 @@ fn carriage_points(status: &MachineStatus) -> Option<([f32; 3], Option<[f32; 3]>
 }
 
 impl MachineStatusLogger {
+    /// Logs a controller's heater readings at the sink's current time, as scalars
+    /// `/machine/<id>/temperature/<heater>` and `…/<heater>_target` (°C): a printer's heat-up,
+    /// print and cool-down beside its position.
+    pub fn log_heaters(&self, sink: &RerunSink, machine_id: &str, heaters: &[(&str, f64, f64)]) {
+        let Some(rec) = sink.stream() else { return };
+        for (name, current, target) in heaters {
+            let base = format!("/machine/{machine_id}/temperature/{name}");
+            sink.report(rec.log(base.as_str(), &rerun::Scalars::single(*current)));
+            sink.report(rec.log(format!("{base}_target"), &rerun::Scalars::single(*target)));
+        }
+    }
+
     /// Logs one status at the sink's current time.
     pub fn log(&mut self, sink: &RerunSink, status: &MachineStatus) {
         let Some(rec) = sink.stream() else { return };

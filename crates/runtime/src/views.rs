@@ -11,21 +11,26 @@
 //! | machine axes | `joint_states` | `sensor_msgs/msg/JointState` | reliable, volatile |
 //! | tool frames | `/tf` | `tf2_msgs/msg/TFMessage` | reliable, volatile |
 //! | machine health | `/diagnostics` | `diagnostic_msgs/msg/DiagnosticArray` | reliable, volatile, 1 Hz |
+//! | a printer's heaters | `<machine>/temperature/<heater>` | `sensor_msgs/msg/Temperature` | reliable, volatile |
 //!
 //! The views are for people: a view that cannot be made or sent is logged and skipped, and
 //! the node carries on.
 
-use std::sync::Mutex;
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use cell_msgs::diagnostic_msgs::DiagnosticArray;
 use cell_msgs::geometry_msgs::TransformStamped;
 use cell_msgs::nav_msgs::Path;
-use cell_msgs::sensor_msgs::{Image, JointState};
+use cell_msgs::sensor_msgs::{Image, JointState, Temperature};
 use cell_msgs::tf2_msgs::TFMessage;
 use cell_msgs::visualization_msgs::MarkerArray;
 use cell_msgs::{HeatMap, MachineStatus, RosMessage, Toolpath};
 use cell_views::{frames, topics};
+
+/// A heater's reading, for [`MachineViews::publish`].
+pub use cell_views::HeaterReading;
 
 use crate::{CellNode, Publisher, QosPreset};
 
@@ -165,12 +170,27 @@ struct MachinePublishers {
     joint_states: Publisher<JointState>,
     tf: Publisher<TFMessage>,
     diagnostics: Publisher<DiagnosticArray>,
+    /// One per heater topic, made when its first reading comes (a printer may have no bed).
+    temperatures: Mutex<BTreeMap<String, Arc<Publisher<Temperature>>>>,
     frames: StaticFrames,
     last_diagnostics: Mutex<Option<Instant>>,
 }
 
-/// The machine bridge's views: `joint_states`, the tool frames on `/tf` and the bridge's
-/// health on `/diagnostics`.
+impl MachinePublishers {
+    /// The publisher of `topic`, made on first use.
+    fn temperature(&self, topic: &str) -> anyhow::Result<Arc<Publisher<Temperature>>> {
+        let mut all = self.temperatures.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = all.get(topic) {
+            return Ok(p.clone());
+        }
+        let p = Arc::new(self.node.publisher(topic, QosPreset::Status)?);
+        all.insert(topic.to_owned(), p.clone());
+        Ok(p)
+    }
+}
+
+/// The machine bridge's views: `joint_states`, the tool frames on `/tf`, each printer heater's
+/// `sensor_msgs/Temperature` and the bridge's health on `/diagnostics`.
 pub struct MachineViews(Option<MachinePublishers>);
 
 /// How often `/diagnostics` is sent (`diagnostic_updater`'s default period).
@@ -187,15 +207,17 @@ impl MachineViews {
             joint_states: node.publisher(topics::JOINT_STATES, QosPreset::Status)?,
             tf: node.publisher(topics::TF, QosPreset::Status)?,
             diagnostics: node.publisher(topics::DIAGNOSTICS, QosPreset::Status)?,
+            temperatures: Mutex::new(BTreeMap::new()),
             frames: StaticFrames::new(node)?,
             last_diagnostics: Mutex::new(None),
         })))
     }
 
     /// Publishes one `JointState` per machine, one `/tf` message with every machine's tool
-    /// frame, and, at most every [`DIAGNOSTICS_PERIOD`], the diagnostics of all machines.
-    /// Each machine's frame is attached to `cell` the first time it is seen.
-    pub async fn publish(&self, statuses: &[MachineStatus]) {
+    /// frame, one `Temperature` per heater reading on [`topics::temperature`] (stamped now),
+    /// and, at most every [`DIAGNOSTICS_PERIOD`], the diagnostics of all machines with their
+    /// heaters. Each machine's frame is attached to `cell` the first time it is seen.
+    pub async fn publish(&self, statuses: &[MachineStatus], heaters: &[HeaterReading]) {
         let Some(p) = &self.0 else { return };
         for s in statuses {
             p.frames
@@ -210,6 +232,14 @@ impl MachineViews {
         if !transforms.is_empty() {
             send(&p.tf, TFMessage { transforms }).await;
         }
+        let stamp = p.node.now();
+        for h in heaters {
+            let topic = topics::temperature(&h.machine_id, &h.heater);
+            match p.temperature(&topic) {
+                Ok(publisher) => send(&publisher, cell_views::temperature(h, stamp)).await,
+                Err(e) => warn_on_error(&topic, Err(e)),
+            }
+        }
         let due = {
             let mut last = p.last_diagnostics.lock().unwrap_or_else(|e| e.into_inner());
             let due = last.is_none_or(|t| t.elapsed() >= DIAGNOSTICS_PERIOD);
@@ -219,7 +249,7 @@ impl MachineViews {
             due
         };
         if due {
-            let array = cell_views::diagnostics(p.node.name(), statuses, p.node.now());
+            let array = cell_views::diagnostics(p.node.name(), statuses, heaters, stamp);
             send(&p.diagnostics, array).await;
         }
     }

@@ -1,7 +1,9 @@
 //! The goal server over real DDS, two in-process nodes on loopback: a goal that fails its
 //! check is rejected before it is accepted, a good one streams feedback and succeeds, a result
 //! asked for after its goal ended still arrives, a cancel is honoured, and the server returns
-//! once its node shuts down; an async handler serves goals side by side.
+//! once its node shuts down; an async handler serves goals side by side; every result request
+//! is answered (twice, late, after the result was dropped) and the end status is published
+//! without one.
 
 use std::time::Duration;
 
@@ -14,10 +16,16 @@ use futures::StreamExt;
 /// Generous bound for discovery and delivery on a loaded 2-core machine.
 const PATIENCE: Duration = Duration::from_secs(30);
 
-/// A domain no concurrently running test binary of the workspace is likely to use (the root
-/// package's integration tests pick theirs the same way).
+/// A domain no concurrently running test binary of the workspace is likely to use: counted down
+/// from the top of the root package's integration tests' range (`CELL_TEST_DOMAIN_BASE`, or one
+/// picked by process id), which they use from the bottom.
 fn domain(n: u16) -> u16 {
-    100 + (std::process::id() % 8) as u16 * 16 + 15 - n
+    let base = std::env::var("CELL_TEST_DOMAIN_BASE")
+        .ok()
+        .and_then(|b| b.parse::<u16>().ok())
+        .filter(|b| *b <= 216)
+        .unwrap_or(100 + (std::process::id() % 8) as u16 * 16);
+    base + 15 - n
 }
 
 fn node(name: &str, domain: u16) -> (CellNode, cell_runtime::Shutdown) {
@@ -95,6 +103,21 @@ fn goal(chord: f64, iterations: u32) -> PlanHotwireGoal {
         iterations,
         ..Default::default()
     }
+}
+
+/// Sends a goal to sleep `ms` milliseconds (in `iterations`) as job `job`; it must be accepted.
+async fn send_sleep(client: &Client, job: &str, ms: u32) -> cell_runtime::action::GoalId {
+    let g = PlanHotwireGoal {
+        job_id: job.into(),
+        iterations: ms,
+        ..Default::default()
+    };
+    let (id, response) = tokio::time::timeout(PATIENCE, client.async_send_goal(g))
+        .await
+        .expect("goal answered in time")
+        .expect("goal sent");
+    assert!(response.accepted);
+    id
 }
 
 async fn result_of(
@@ -230,24 +253,9 @@ async fn concurrent_goals_run_side_by_side_and_cancel_alone() {
     let client: Client = client_node.action_client("/sleep").unwrap();
     assert!(client_node.wait_for_action_server("/sleep", PATIENCE).await);
     let client = &client;
-    let send = |job: &str, ms: u32| {
-        let g = PlanHotwireGoal {
-            job_id: job.into(),
-            iterations: ms,
-            ..Default::default()
-        };
-        async move {
-            let (id, response) = tokio::time::timeout(PATIENCE, client.async_send_goal(g))
-                .await
-                .expect("goal answered in time")
-                .expect("goal sent");
-            assert!(response.accepted);
-            id
-        }
-    };
-    let long = send("long", 600_000).await;
+    let long = send_sleep(client, "long", 600_000).await;
     // Accepted and run while the long one still runs.
-    let short = send("short", 100).await;
+    let short = send_sleep(client, "short", 100).await;
     let (status, result) = result_of(client, short).await;
     assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
     assert_eq!(result.message, "short: slept");
@@ -255,6 +263,110 @@ async fn concurrent_goals_run_side_by_side_and_cancel_alone() {
     let (status, result) = result_of(client, long).await;
     assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
     assert_eq!(result.message, "long: woken");
+    assert!(!serving.is_finished());
+    serving.abort();
+}
+
+/// Every answer to `requests` (result requests of `client`), in request order, or a panic after
+/// `timeout`. Reads the replies itself: waiting for one request at a time would drop the reply
+/// to another that arrived first.
+async fn answers(
+    client: &Client,
+    requests: &[ros2_client::RmwRequestId],
+    timeout: Duration,
+) -> Vec<(GoalStatusEnum, PlanHotwireResult)> {
+    let deadline = tokio::time::Instant::now() + timeout;
+    let mut got = vec![None; requests.len()];
+    while got.iter().any(Option::is_none) {
+        assert!(
+            tokio::time::Instant::now() < deadline,
+            "answered within {timeout:?}: {:?} of {requests:?}",
+            got.iter().map(Option::is_some).collect::<Vec<_>>()
+        );
+        match client
+            .result_client()
+            .receive_response()
+            .expect("a reply decodes")
+        {
+            Some((id, answer)) => {
+                let i = requests
+                    .iter()
+                    .position(|r| *r == id)
+                    .expect("a reply we asked for");
+                got[i] = Some((answer.status, answer.result));
+            }
+            None => tokio::time::sleep(Duration::from_millis(20)).await,
+        }
+    }
+    got.into_iter().flatten().collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_result_request_is_answered_and_the_end_status_is_published_without_one() {
+    let domain = domain(2);
+    let (server_node, _) = node("sleeper", domain);
+    let (client_node, _) = node("operator", domain);
+    let result_timeout = Duration::from_secs(4);
+    let serving = tokio::spawn(goal_server::serve(
+        server_node,
+        "/sleep",
+        Sleeper,
+        ServeOptions::one_at_a_time(result_timeout.as_secs_f64()),
+    ));
+    let client: Client = client_node.action_client("/sleep").unwrap();
+    assert!(client_node.wait_for_action_server("/sleep", PATIENCE).await);
+    let client = &client;
+    let ask = |goal| client.request_result(goal).expect("result requested");
+
+    // Asked twice while the goal runs (a client retrying), and once after it ended: every
+    // request is answered.
+    let twice = send_sleep(client, "twice", 1500).await;
+    let early = [ask(twice), ask(twice)];
+    for (status, result) in answers(client, &early, PATIENCE).await {
+        assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
+        assert_eq!(result.message, "twice: slept");
+    }
+    let late = ask(twice);
+    let t0 = std::time::Instant::now();
+    let (status, result) = answers(client, &[late], PATIENCE).await.remove(0);
+    assert_eq!(status, GoalStatusEnum::Succeeded);
+    assert_eq!(result.message, "twice: slept");
+    eprintln!("late request answered in {:?}", t0.elapsed());
+
+    // Nobody asks: the end status is still published when the goal ends.
+    let quiet = send_sleep(client, "quiet", 200).await;
+    let statuses = client.status_stream(quiet);
+    let mut statuses = std::pin::pin!(statuses);
+    let ended = tokio::time::timeout(PATIENCE, async {
+        loop {
+            let status = statuses.next().await.expect("stream").expect("status");
+            if status.status != GoalStatusEnum::Accepted
+                && status.status != GoalStatusEnum::Executing
+            {
+                return status.status;
+            }
+        }
+    })
+    .await
+    .expect("the end status is published without a result request");
+    let ended_at = std::time::Instant::now();
+    assert_eq!(ended, GoalStatusEnum::Succeeded);
+    let (status, result) = answers(client, &[ask(quiet)], PATIENCE).await.remove(0);
+    assert_eq!(status, GoalStatusEnum::Succeeded);
+    assert_eq!(result.message, "quiet: slept");
+
+    // After the result timeout the result is gone: asked again, the goal is unknown (rclcpp's
+    // answer), and so is a goal the server never had.
+    tokio::time::sleep(
+        (result_timeout + Duration::from_secs(2)).saturating_sub(ended_at.elapsed()),
+    )
+    .await;
+    let never = cell_runtime::action::GoalId::new_random();
+    let gone = answers(client, &[ask(quiet), ask(never)], PATIENCE).await;
+    for (status, result) in gone {
+        assert_eq!(status, GoalStatusEnum::Unknown);
+        assert_eq!(result, PlanHotwireResult::default());
+    }
     assert!(!serving.is_finished());
     serving.abort();
 }

@@ -679,17 +679,7 @@ impl RwsClient {
     pub async fn execution_state(&self) -> Result<ExecutionState, RwsError> {
         let call = self.api.execution();
         let body = self.send_control(&call).await?;
-        let item = self.find_item(&call, &body, "rap-execution")?;
-        let state = match field(&item, "ctrlexecstate").as_deref() {
-            Some("running") => ExecState::Running,
-            Some("stopped") => ExecState::Stopped,
-            Some(other) => ExecState::Other(other.to_owned()),
-            None => return Err(self.protocol(&call, "no `ctrlexecstate` in rap-execution", &body)),
-        };
-        Ok(ExecutionState {
-            state,
-            cycle: field(&item, "cycle").unwrap_or_default(),
-        })
+        parse_execution_state(&body).map_err(|what| self.protocol(&call, &what, &body))
     }
 
     /// Polls the execution state every `poll` until RAPID is not running; gives up after
@@ -730,9 +720,7 @@ impl RwsClient {
         check_signal(signal)?;
         let call = self.api.read_signal(signal);
         let body = self.send_control(&call).await?;
-        let item = self.find_item(&call, &body, "ios-signal")?;
-        field(&item, "lvalue")
-            .ok_or_else(|| self.protocol(&call, "no `lvalue` in ios-signal", &body))
+        parse_signal_value(&body).map_err(|what| self.protocol(&call, &what, &body))
     }
 
     /// Sets a signal (`signal` as in [`RwsClient::read_signal`]) to `value` (`0`/`1` for
@@ -758,20 +746,43 @@ impl RwsClient {
         }
     }
 
-    /// The first object with `"_type": ty` in a JSON answer (`_embedded._state` in RWS 1.0
-    /// `?json=1`, `state` in RWS 2.0 HAL).
-    fn find_item(&self, call: &Call, body: &str, ty: &str) -> Result<serde_json::Value, RwsError> {
-        let value: serde_json::Value = serde_json::from_str(body)
-            .map_err(|e| self.protocol(call, &format!("not JSON ({e})"), body))?;
-        find_typed(&value, ty)
-            .cloned()
-            .ok_or_else(|| self.protocol(call, &format!("no `{ty}` item"), body))
-    }
-
     /// The RWS generation this client speaks.
     pub fn version(&self) -> RwsVersion {
         self.cfg.rws
     }
+}
+
+/// The execution state in the answer to `GET /rw/rapid/execution` (the `rap-execution` item's
+/// `ctrlexecstate` and `cycle`); `Err` says what is missing.
+pub fn parse_execution_state(body: &str) -> Result<ExecutionState, String> {
+    let item = find_item(body, "rap-execution")?;
+    let state = match field(&item, "ctrlexecstate").as_deref() {
+        Some("running") => ExecState::Running,
+        Some("stopped") => ExecState::Stopped,
+        Some(other) => ExecState::Other(other.to_owned()),
+        None => return Err("no `ctrlexecstate` in rap-execution".into()),
+    };
+    Ok(ExecutionState {
+        state,
+        cycle: field(&item, "cycle").unwrap_or_default(),
+    })
+}
+
+/// A signal's value (`lvalue` of the `ios-signal` item) in the answer to a signal read; `Err`
+/// says what is missing.
+pub fn parse_signal_value(body: &str) -> Result<String, String> {
+    let item = find_item(body, "ios-signal")?;
+    field(&item, "lvalue").ok_or_else(|| "no `lvalue` in ios-signal".into())
+}
+
+/// The first object with `"_type": ty` in a JSON answer (`_embedded._state` in RWS 1.0
+/// `?json=1`, `state` in RWS 2.0 HAL).
+fn find_item(body: &str, ty: &str) -> Result<serde_json::Value, String> {
+    let value: serde_json::Value =
+        serde_json::from_str(body).map_err(|e| format!("not JSON ({e})"))?;
+    find_typed(&value, ty)
+        .cloned()
+        .ok_or_else(|| format!("no `{ty}` item"))
 }
 
 fn find_typed<'a>(v: &'a serde_json::Value, ty: &str) -> Option<&'a serde_json::Value> {

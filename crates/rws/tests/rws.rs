@@ -685,12 +685,13 @@ fn committed_controller_configs_parse() {
     let mut n = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
-        // GRBL controllers share the directory; they are the machine bridge's to read.
-        let grbl = std::fs::read_to_string(&path)
+        // GRBL and Marlin controllers share the directory; they are the machine bridge's to
+        // read.
+        let other = std::fs::read_to_string(&path)
             .unwrap()
             .lines()
-            .any(|l| l.trim() == "protocol: grbl");
-        if path.extension().is_some_and(|e| e == "yaml") && !grbl {
+            .any(|l| matches!(l.trim(), "protocol: grbl" | "protocol: marlin"));
+        if path.extension().is_some_and(|e| e == "yaml") && !other {
             let r = ControllerConfig::load(&path);
             // An https URL needs the `tls` feature; everything else must parse.
             match r {

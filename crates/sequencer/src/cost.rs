@@ -147,8 +147,8 @@ impl<'p> Evaluator<'p> {
         {
             return Err(EvalError::NoPierce(c));
         }
-        // Validate the sheet once.
-        ThermalSim::new(problem.sheet, problem.start, &thermal)?;
+        // The sheet's raster, without allocating it.
+        thermal.raster_size(problem.sheet)?;
         let cos_limit = (180.0 - cost.corner_angle_deg).to_radians().cos();
         let corner = problem
             .contours

@@ -131,6 +131,10 @@ pub enum DxfError {
         /// The cause.
         source: LayoutError,
     },
+    /// A JSON layout cannot be read or does not parse ([`LayoutError::Io`],
+    /// [`LayoutError::Json`]: they name the file, and the line and field).
+    #[error(transparent)]
+    Json(LayoutError),
     /// A non-finite coordinate or parameter.
     #[error("{path}: {entity}: non-finite coordinate")]
     NonFinite {
@@ -138,6 +142,18 @@ pub enum DxfError {
         path: String,
         /// The entity.
         entity: EntityRef,
+    },
+    /// The drawing expands beyond a limit ([`MAX_PLACED_ENTITIES`], [`MAX_POINTS`],
+    /// [`MAX_ARC_RADIUS_MM`]); names the entity (for nested INSERTs, the drawing's INSERT
+    /// whose expansion crossed it) and the limit.
+    #[error("{path}: {entity}: {reason}")]
+    TooLarge {
+        /// The file.
+        path: String,
+        /// The entity (boxed: keeps the error as small as the others).
+        entity: Box<EntityRef>,
+        /// What it would take, then `the limit is … (CONSTANT_NAME)`.
+        reason: String,
     },
     /// Geometry the reader cannot turn into contours, or an entity it cannot use.
     #[error("{path}: {entity}: {reason}")]
@@ -153,6 +169,24 @@ pub enum DxfError {
 
 /// Blocks inside blocks deeper than this are taken for a cycle.
 const MAX_BLOCK_DEPTH: usize = 16;
+
+/// Most entities one drawing may place, counted across INSERT recursion (every entity of a
+/// block once per array cell of every INSERT above it, annotation included) (issue 23: an
+/// 18 KB file of 8 nested 10 × 10 arrays places 10¹⁶). A large nested sheet holds ~500 parts
+/// of ~50 entities (25 000); the limit is 10× that, and its pieces stay well under 100 MB.
+pub const MAX_PLACED_ENTITIES: usize = 250_000;
+
+/// Most contour points one drawing may flatten to (vertices, and arcs, circles, ellipses and
+/// splines at [`DxfOptions::chord_tol_mm`]) (issue 23). A 500-part sheet at the default
+/// tolerance has ~2·10⁵ (a 100 mm radius circle is ~300 points); the limit is 5× that and
+/// keeps the containment and precedence steps within seconds.
+pub const MAX_POINTS: usize = 1_000_000;
+
+/// Largest arc radius flattened, mm: 1000× a 10 m sheet, beyond any cutting table (issue 23).
+/// An arc this flat whose sagitta is within the chord tolerance is its chord (that is what
+/// the tolerance allows); a larger one is refused: at `tol/r` below ~10⁻¹² the chord-angle
+/// formula `2·acos(1 − tol/r)` loses its digits, and such an arc spans kilometres.
+pub const MAX_ARC_RADIUS_MM: f64 = 1e7;
 
 /// A 2-D affine map `p ↦ A·p + t` (row-major `[a, b, tx, c, d, ty]`), the placement of an
 /// INSERT's block.
@@ -363,16 +397,88 @@ pub fn flatten(piece: &Piece, chord_tol_mm: f64) -> Vec<Point> {
 
 /// Flattens `[x, y, bulge]` vertices, open or closed, to chords within `chord_tol_mm`.
 fn flatten_path(vertices: &[[f64; 3]], closed: bool, chord_tol_mm: f64) -> Vec<Point> {
+    let tol = chord_tol_mm.max(MIN_CHORD_TOL_MM);
+    let vertices = &split_major_arcs(vertices, closed);
     let mut p: Polyline<f64> = Polyline::with_capacity(vertices.len(), closed);
-    for v in vertices {
-        p.add(v[0], v[1], v[2]);
+    for (i, v) in vertices.iter().enumerate() {
+        let next = vertices.get(i + 1).or(closed.then_some(&vertices[0]));
+        // An arc whose sagitta is within the tolerance is its own chord (and a very flat one
+        // would lose cavalier_contours' `acos(1 − tol/r)` to rounding).
+        let flat = next.is_none_or(|w| arc_sagitta(v, w) <= tol);
+        p.add(v[0], v[1], if flat { 0.0 } else { v[2] });
     }
     let lines = if p.iter_vertexes().any(|v| v.bulge != 0.0) {
-        p.arcs_to_approx_lines(chord_tol_mm.max(1e-6)).unwrap_or(p)
+        p.arcs_to_approx_lines(tol).unwrap_or(p)
     } else {
         p
     };
     lines.iter_vertexes().map(|v| [v.x, v.y]).collect()
+}
+
+/// The same path with every arc over 180° (|bulge| > 1) split at its midpoint into two.
+/// `cavalier_contours` 0.9 flattens an arc through the smaller angle between its end points
+/// (`delta_angle`), which for a major arc is the wrong side of the circle.
+fn split_major_arcs(vertices: &[[f64; 3]], closed: bool) -> Vec<[f64; 3]> {
+    let mut out = Vec::with_capacity(vertices.len());
+    for (i, v) in vertices.iter().enumerate() {
+        let next = vertices.get(i + 1).or(closed.then_some(&vertices[0]));
+        match next {
+            Some(w) if v[2].abs() > 1.0 => {
+                // The arc's midpoint lies a sagitta off the chord's midpoint, to the right of
+                // v → w for a counter-clockwise (positive) bulge; each half sweeps θ/2, so
+                // its bulge is tan(θ/8) = tan(atan|b| / 2).
+                let (dx, dy) = (w[0] - v[0], w[1] - v[1]);
+                let s = v[2] / 2.0;
+                let mid = [0.5 * (v[0] + w[0]) + s * dy, 0.5 * (v[1] + w[1]) - s * dx];
+                let half = v[2].signum() * (v[2].abs().atan() / 2.0).tan();
+                out.push([v[0], v[1], half]);
+                out.push([mid[0], mid[1], half]);
+            }
+            _ => out.push(*v),
+        }
+    }
+    out
+}
+
+/// The finest chord tolerance flattening uses, mm.
+const MIN_CHORD_TOL_MM: f64 = 1e-6;
+
+/// The sagitta of the arc from `v` (bulge `v[2]`) to `w`: `|bulge|·c/2` for chord `c`, the
+/// largest distance between the arc and its chord.
+fn arc_sagitta(v: &[f64; 3], w: &[f64; 3]) -> f64 {
+    v[2].abs() * distance([v[0], v[1]], [w[0], w[1]]) / 2.0
+}
+
+/// How many points [`flatten_path`] makes of `piece` at `chord_tol_mm` once a placement
+/// stretching it by at most `scale` is applied: one per vertex, plus per arc of radius `r`
+/// and sweep `θ` (`θ = 4·atan|bulge|`) `⌈θ / 2·acos(1 − tol/r)⌉ − 1` (cavalier_contours'
+/// count), none for an arc within the tolerance of its chord.
+///
+/// # Errors
+/// The radius (mm) of an arc larger than [`MAX_ARC_RADIUS_MM`] that is not within the
+/// tolerance of its chord.
+fn flattened_points(piece: &Piece, chord_tol_mm: f64, scale: f64) -> Result<usize, f64> {
+    let tol = chord_tol_mm.max(MIN_CHORD_TOL_MM);
+    let v = &split_major_arcs(&piece.vertices, piece.closed);
+    let mut count = v.len();
+    for (i, a) in v.iter().enumerate() {
+        let Some(b) = v.get(i + 1).or(piece.closed.then_some(&v[0])) else {
+            break;
+        };
+        let sagitta = scale * arc_sagitta(a, b);
+        if a[2] == 0.0 || sagitta <= tol {
+            continue;
+        }
+        let chord = scale * distance([a[0], a[1]], [b[0], b[1]]);
+        let sweep = 4.0 * a[2].abs().atan();
+        let radius = chord / (2.0 * (sweep / 2.0).sin());
+        if radius.is_nan() || radius > MAX_ARC_RADIUS_MM {
+            return Err(radius);
+        }
+        let step = 2.0 * (1.0 - tol / radius).acos();
+        count = count.saturating_add(((sweep / step).ceil() as usize).saturating_sub(1));
+    }
+    Ok(count)
 }
 
 /// Reads a DXF file into a [`Layout`] (module docs; issue 7, seed 003 §A1).
@@ -396,7 +502,7 @@ fn load_drawing(path: &Path) -> Result<Drawing, DxfError> {
 /// JSON format ([`Layout::from_json_file`]) (issue 7: `--layout FILE.dxf|json`).
 ///
 /// # Errors
-/// [`DxfError`]; JSON errors come as [`DxfError::Layout`].
+/// [`DxfError`]; JSON errors come as [`DxfError::Json`].
 pub fn read_layout(path: impl AsRef<Path>, opt: &DxfOptions) -> Result<Layout, DxfError> {
     read_layout_with_rule(path, opt).map(|(layout, _)| layout)
 }
@@ -417,10 +523,7 @@ pub fn read_layout_with_rule(
         let drawing = load_drawing(path)?;
         layout_from_drawing_with_rule(&drawing, &path.display().to_string(), opt)
     } else {
-        let layout = Layout::from_json_file(path).map_err(|source| DxfError::Layout {
-            path: path.display().to_string(),
-            source,
-        })?;
+        let layout = Layout::from_json_file(path).map_err(DxfError::Json)?;
         Ok((layout, SheetRule::Layout))
     }
 }
@@ -453,6 +556,9 @@ pub fn layout_from_drawing_with_rule(
         name,
         opt,
         pieces: &mut pieces,
+        placed: 0,
+        points: 0,
+        root: None,
     };
     reader.collect(drawing.entities(), &Placement::IDENTITY, None, 0)?;
     let closed =
@@ -557,6 +663,12 @@ struct Reader<'a> {
     name: &'a str,
     opt: &'a DxfOptions,
     pieces: &'a mut Vec<Piece>,
+    /// Entities placed so far, across INSERT recursion ([`MAX_PLACED_ENTITIES`]).
+    placed: usize,
+    /// Flattened points so far ([`MAX_POINTS`]).
+    points: usize,
+    /// The drawing-level entity being expanded (limits name it for nested INSERTs).
+    root: Option<EntityRef>,
 }
 
 /// The INSERT a block's entities are placed by: its block name, handle and layer.
@@ -591,6 +703,37 @@ impl Reader<'_> {
                     source.layer = v.layer.clone();
                 }
             }
+            if depth == 0 {
+                self.root = Some(match &e.specific {
+                    EntityType::Insert(ins) => EntityRef {
+                        kind: format!("INSERT of block '{}'", ins.name),
+                        ..source.clone()
+                    },
+                    _ => source.clone(),
+                });
+            }
+            // Limits name the drawing's entity whose expansion crosses them.
+            let too_large = |what: String, limit: String, name: &'static str| DxfError::TooLarge {
+                path: self.name.into(),
+                entity: Box::new(self.root.clone().unwrap_or_else(|| source.clone())),
+                reason: format!("{what}: the limit is {limit} ({name})"),
+            };
+            self.placed += 1;
+            if self.placed > MAX_PLACED_ENTITIES {
+                let what = if depth == 0 {
+                    format!("the drawing places more than {MAX_PLACED_ENTITIES} entities")
+                } else {
+                    format!(
+                        "expanding it places more than {MAX_PLACED_ENTITIES} entities (INSERT \
+                         arrays multiply: rows × columns at each of its {depth} nesting levels)"
+                    )
+                };
+                return Err(too_large(
+                    what,
+                    format!("{MAX_PLACED_ENTITIES} placed entities"),
+                    "MAX_PLACED_ENTITIES",
+                ));
+            }
             let unsupported = |reason: String| DxfError::Unsupported {
                 path: self.name.into(),
                 entity: source.clone(),
@@ -619,9 +762,23 @@ impl Reader<'_> {
                 }
                 continue;
             }
-            let Some(piece) =
-                entity_piece(e, source.clone(), self.opt.chord_tol_mm).map_err(unsupported)?
-            else {
+            // The entity itself, when the limit names the INSERT that placed it.
+            let inner = if depth > 0 {
+                format!("{source}: ")
+            } else {
+                String::new()
+            };
+            let tol = self.opt.chord_tol_mm;
+            let piece =
+                entity_piece(e, source.clone(), tol, at.max_scale()).map_err(|e| match e {
+                    PieceError::Unsupported(reason) => unsupported(reason),
+                    PieceError::TooLarge {
+                        what,
+                        limit,
+                        constant,
+                    } => too_large(format!("{inner}{what}"), limit, constant),
+                })?;
+            let Some(piece) = piece else {
                 continue;
             };
             if piece.vertices.iter().flatten().any(|v| !v.is_finite()) {
@@ -629,6 +786,29 @@ impl Reader<'_> {
                     path: self.name.into(),
                     entity: source,
                 });
+            }
+            let n = flattened_points(&piece, tol, at.max_scale()).map_err(|radius| {
+                let what = format!(
+                    "{inner}an arc of radius {radius:.3e} mm with a sagitta over the chord \
+                     tolerance ({tol} mm) is too large to flatten"
+                );
+                too_large(
+                    what,
+                    format!("{MAX_ARC_RADIUS_MM:e} mm"),
+                    "MAX_ARC_RADIUS_MM",
+                )
+            })?;
+            self.points = self.points.saturating_add(n);
+            if self.points > MAX_POINTS {
+                let what = format!(
+                    "{inner}flattened at {tol} mm it brings the drawing to more than \
+                     {MAX_POINTS} points (this entity: {n})"
+                );
+                return Err(too_large(
+                    what,
+                    format!("{MAX_POINTS} points"),
+                    "MAX_POINTS",
+                ));
             }
             self.pieces.push(at.place(piece, self.opt.chord_tol_mm));
         }
@@ -709,10 +889,45 @@ fn entity_kind(e: &Entity) -> &'static str {
     }
 }
 
-/// The polyline piece of one entity: `Ok(None)` for annotation, `Err(reason)` for geometry
-/// this reader cannot use. ELLIPSE and SPLINE come flattened to `chord_tol_mm`.
-fn entity_piece(e: &Entity, source: EntityRef, chord_tol_mm: f64) -> Result<Option<Piece>, String> {
-    let closed_curve = |pts: Vec<Point>| -> Result<Option<Piece>, String> {
+/// Why an entity gives no piece.
+#[derive(Debug)]
+enum PieceError {
+    /// Geometry this reader cannot use: why, and what to do about it.
+    Unsupported(String),
+    /// Flattening it crosses a limit ([`DxfError::TooLarge`]).
+    TooLarge {
+        /// What it would take.
+        what: String,
+        /// The limit, with its unit.
+        limit: String,
+        /// The limit's constant.
+        constant: &'static str,
+    },
+}
+
+impl From<String> for PieceError {
+    fn from(reason: String) -> Self {
+        PieceError::Unsupported(reason)
+    }
+}
+
+impl From<&str> for PieceError {
+    fn from(reason: &str) -> Self {
+        PieceError::Unsupported(reason.into())
+    }
+}
+
+/// The polyline piece of one entity: `Ok(None)` for annotation, an error for geometry this
+/// reader cannot use or whose flattening crosses a limit. ELLIPSE and SPLINE come flattened
+/// so that, once placed by a map stretching by at most `scale`, their chords stay within
+/// `chord_tol_mm` of the curve.
+fn entity_piece(
+    e: &Entity,
+    source: EntityRef,
+    chord_tol_mm: f64,
+    scale: f64,
+) -> Result<Option<Piece>, PieceError> {
+    let closed_curve = |pts: Vec<Point>| -> Result<Option<Piece>, PieceError> {
         if pts.iter().flatten().any(|v| !v.is_finite()) {
             return Err("non-finite coordinate or parameter".into());
         }
@@ -781,10 +996,11 @@ fn entity_piece(e: &Entity, source: EntityRef, chord_tol_mm: f64) -> Result<Opti
             (v, p.is_closed())
         }
         EntityType::Ellipse(el) => {
-            return closed_curve(flatten_ellipse(el, chord_tol_mm));
+            return closed_curve(flatten_ellipse(el, chord_tol_mm, scale)?);
         }
         EntityType::Spline(sp) => {
-            return closed_curve(flatten_spline(sp, chord_tol_mm)?);
+            let local_tol = chord_tol_mm.max(MIN_CHORD_TOL_MM) / scale.max(1e-12);
+            return closed_curve(flatten_spline(sp, local_tol)?);
         }
         EntityType::Face3D(_)
         | EntityType::Solid3D(_)
@@ -815,10 +1031,35 @@ fn entity_piece(e: &Entity, source: EntityRef, chord_tol_mm: f64) -> Result<Opti
 }
 
 /// Points along an ELLIPSE (WCS centre and major axis, minor axis `ratio · (n × major)`),
-/// from its start to its end parameter, with chords deviating at most `chord_tol_mm`
-/// (step `2·acos(1 − tol/a)` on the major radius `a`, which bounds the deviation).
-fn flatten_ellipse(el: &dxf::entities::Ellipse, chord_tol_mm: f64) -> Vec<Point> {
+/// from its start to its end parameter, with chords deviating at most `chord_tol_mm` once
+/// placed by a map stretching by at most `scale` (step `2·acos(1 − tol/a)` on the major
+/// radius `a`, which bounds the deviation): `⌈sweep / step⌉ + 1` points, at least 9.
+///
+/// # Errors
+/// Never coarsened to fit (issue 23): a major radius, placed, over [`MAX_ARC_RADIUS_MM`], or
+/// a flattening of more than [`MAX_POINTS`] points, is [`PieceError::TooLarge`].
+fn flatten_ellipse(
+    el: &dxf::entities::Ellipse,
+    chord_tol_mm: f64,
+    scale: f64,
+) -> Result<Vec<Point>, PieceError> {
     let (m, n) = (&el.major_axis, &el.normal);
+    let given = [
+        el.center.x,
+        el.center.y,
+        m.x,
+        m.y,
+        m.z,
+        n.x,
+        n.y,
+        n.z,
+        el.minor_axis_ratio,
+        el.start_parameter,
+        el.end_parameter,
+    ];
+    if given.iter().any(|v| !v.is_finite()) {
+        return Err("non-finite coordinate or parameter".into());
+    }
     let n_len = (n.x * n.x + n.y * n.y + n.z * n.z).sqrt();
     let (nx, ny, nz) = if n_len > 0.0 {
         (n.x / n_len, n.y / n_len, n.z / n_len)
@@ -833,13 +1074,38 @@ fn flatten_ellipse(el: &dxf::entities::Ellipse, chord_tol_mm: f64) -> Vec<Point>
     if sweep <= 1e-12 {
         sweep = std::f64::consts::TAU;
     }
-    let step = if a > chord_tol_mm {
-        2.0 * (1.0 - chord_tol_mm / a).acos()
+    let placed_radius = a * scale;
+    if placed_radius > MAX_ARC_RADIUS_MM {
+        return Err(PieceError::TooLarge {
+            what: format!(
+                "an ellipse of major radius {placed_radius:.3e} mm is too large to flatten"
+            ),
+            limit: format!("{MAX_ARC_RADIUS_MM:e} mm"),
+            constant: "MAX_ARC_RADIUS_MM",
+        });
+    }
+    // In the ellipse's own units: the placement stretches the chords' deviation by `scale`.
+    let tol = chord_tol_mm.max(MIN_CHORD_TOL_MM) / scale.max(1e-12);
+    let step = if a > tol {
+        2.0 * (1.0 - tol / a).acos()
     } else {
         std::f64::consts::FRAC_PI_2
     };
-    let count = ((sweep / step.max(1e-6)).ceil() as usize).clamp(8, 100_000);
-    (0..=count)
+    // As f64 first: a step rounded to 0 gives infinitely many, refused below.
+    let segments = (sweep / step).ceil().max(8.0);
+    let points = segments + 1.0;
+    if points > MAX_POINTS as f64 {
+        return Err(PieceError::TooLarge {
+            what: format!(
+                "flattened at {chord_tol_mm} mm the ELLIPSE (major radius {placed_radius:.3e} \
+                 mm) needs {points:.0} points"
+            ),
+            limit: format!("{MAX_POINTS} points"),
+            constant: "MAX_POINTS",
+        });
+    }
+    let count = segments as usize;
+    let mut points: Vec<Point> = (0..=count)
         .map(|i| {
             let t = t0 + sweep * i as f64 / count as f64;
             let (s, c) = t.sin_cos();
@@ -848,7 +1114,13 @@ fn flatten_ellipse(el: &dxf::entities::Ellipse, chord_tol_mm: f64) -> Vec<Point>
                 el.center.y + c * m.y + s * minor[1],
             ]
         })
-        .collect()
+        .collect();
+    if sweep == std::f64::consts::TAU {
+        // Closed exactly: sin(2π) ≠ 0 puts the last point microns off the first on a
+        // kilometre ellipse, which would leave it open.
+        points[count] = points[0];
+    }
+    Ok(points)
 }
 
 /// Points along a SPLINE (a NURBS curve of its degree, knots, control points and weights),
@@ -941,6 +1213,12 @@ fn flatten_spline(sp: &dxf::entities::Spline, chord_tol_mm: f64) -> Result<Vec<P
                 stack.push((u0, um, depth + 1));
             } else {
                 out.push(b);
+                if out.len() > MAX_POINTS {
+                    return Err(format!(
+                        "flattened at {tol} mm the SPLINE has more than {MAX_POINTS} points: \
+                         the limit is {MAX_POINTS} points (MAX_POINTS)"
+                    ));
+                }
             }
         }
     }
@@ -1378,5 +1656,304 @@ mod tests {
         let pts = flatten(&circle[0], 0.001);
         let area = cell_geometry::signed_area(&pts).abs();
         assert!((area - std::f64::consts::PI).abs() < 0.01, "area {area}");
+    }
+
+    /// Runs only the entity walk: (entities placed, points counted) or the limit's error.
+    fn expand(d: &Drawing) -> Result<(usize, usize), DxfError> {
+        expand_at(d, DxfOptions::default().chord_tol_mm)
+    }
+
+    /// As [`expand`], flattening at `chord_tol_mm`.
+    fn expand_at(d: &Drawing, chord_tol_mm: f64) -> Result<(usize, usize), DxfError> {
+        let opt = DxfOptions {
+            chord_tol_mm,
+            ..Default::default()
+        };
+        let mut pieces = Vec::new();
+        let mut r = Reader {
+            drawing: d,
+            name: "b.dxf",
+            opt: &opt,
+            pieces: &mut pieces,
+            placed: 0,
+            points: 0,
+            root: None,
+        };
+        r.collect(d.entities(), &Placement::IDENTITY, None, 0)?;
+        Ok((r.placed, r.points))
+    }
+
+    fn text() -> Entity {
+        Entity::new(EntityType::Text(Default::default()))
+    }
+
+    #[test]
+    fn placed_entities_are_capped_across_insert_arrays() {
+        // Block T holds m TEXTs, placed 3 times by one INSERT: 1 + 3·m entities.
+        let m = (MAX_PLACED_ENTITIES - 1) / 3;
+        let mut d = Drawing::new();
+        let mut b = dxf::Block {
+            name: "T".into(),
+            ..Default::default()
+        };
+        b.entities = (0..m).map(|_| text()).collect();
+        d.add_block(b);
+        d.add_entity(Entity::new(EntityType::Insert(dxf::entities::Insert {
+            name: "T".into(),
+            column_count: 3,
+            column_spacing: 1.0,
+            ..Default::default()
+        })));
+        assert_eq!(1 + 3 * m, MAX_PLACED_ENTITIES);
+        assert_eq!(expand(&d).unwrap().0, MAX_PLACED_ENTITIES);
+        d.add_entity(text());
+        let e = expand(&d).unwrap_err().to_string();
+        assert!(
+            e.contains("the drawing places more than 250000 entities")
+                && e.ends_with("the limit is 250000 placed entities (MAX_PLACED_ENTITIES)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn nested_insert_arrays_are_refused_naming_the_outer_insert() {
+        // L0 holds a TEXT; Lk places L(k-1) in a 10 × 10 array; the drawing places L8.
+        let mut d = Drawing::new();
+        let mut b = dxf::Block {
+            name: "L0".into(),
+            ..Default::default()
+        };
+        b.entities.push(text());
+        d.add_block(b);
+        for k in 1..=8 {
+            let mut b = dxf::Block {
+                name: format!("L{k}"),
+                ..Default::default()
+            };
+            b.entities
+                .push(Entity::new(EntityType::Insert(dxf::entities::Insert {
+                    name: format!("L{}", k - 1),
+                    column_count: 10,
+                    row_count: 10,
+                    column_spacing: 10f64.powi(k),
+                    row_spacing: 10f64.powi(k),
+                    ..Default::default()
+                })));
+            d.add_block(b);
+        }
+        let mut top = Entity::new(EntityType::Insert(dxf::entities::Insert {
+            name: "L8".into(),
+            ..Default::default()
+        }));
+        top.common.layer = "PARTS".into();
+        d.add_entity(top);
+        let t0 = std::time::Instant::now();
+        let e = layout_from_drawing(&d, "bomb.dxf", &DxfOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
+        assert!(
+            e.starts_with("bomb.dxf: INSERT of block 'L8' #")
+                && e.contains("on layer 'PARTS': expanding it places more than 250000")
+                && e.ends_with("(MAX_PLACED_ENTITIES)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn flattened_points_are_capped() {
+        use dxf::entities::LwPolyline;
+        use dxf::LwPolylineVertex;
+        let ring = |n: usize| {
+            let mut lw = LwPolyline {
+                vertices: (0..n)
+                    .map(|i| {
+                        let t = i as f64 / n as f64 * std::f64::consts::TAU;
+                        LwPolylineVertex {
+                            x: 1000.0 * t.cos(),
+                            y: 1000.0 * t.sin(),
+                            ..Default::default()
+                        }
+                    })
+                    .collect(),
+                ..Default::default()
+            };
+            lw.set_is_closed(true);
+            Entity::new(EntityType::LwPolyline(lw))
+        };
+        let mut d = Drawing::new();
+        d.add_entity(ring(MAX_POINTS));
+        assert_eq!(expand(&d).unwrap(), (1, MAX_POINTS));
+        let mut d = Drawing::new();
+        d.add_entity(ring(MAX_POINTS + 1));
+        let e = expand(&d).unwrap_err().to_string();
+        assert!(
+            e.contains("LWPOLYLINE #")
+                && e.contains(
+                    "brings the drawing to more than 1000000 points (this entity: 1000001)"
+                )
+                && e.ends_with("the limit is 1000000 points (MAX_POINTS)"),
+            "{e}"
+        );
+        // A circle of radius 10¹⁴ mm would be ~10⁸ points at 0.005 mm.
+        let mut d = Drawing::new();
+        d.add_entity(circle(0.0, 0.0, 1e6));
+        d.add_entity(circle(0.0, 0.0, 1e14));
+        let e = expand(&d).unwrap_err().to_string();
+        assert!(
+            e.contains("an arc of radius 1.000e14 mm") && e.ends_with("(MAX_ARC_RADIUS_MM)"),
+            "{e}"
+        );
+    }
+
+    /// A full ELLIPSE of major radius `a` along x, minor `a/2`.
+    fn ellipse(a: f64) -> Entity {
+        Entity::new(EntityType::Ellipse(dxf::entities::Ellipse {
+            major_axis: dxf::Vector::new(a, 0.0, 0.0),
+            minor_axis_ratio: 0.5,
+            ..Default::default()
+        }))
+    }
+
+    /// Points a full ellipse of major radius `a` flattens to at `tol` (its docs' formula).
+    fn ellipse_points(a: f64, tol: f64) -> usize {
+        (std::f64::consts::TAU / (2.0 * (1.0 - tol / a).acos())).ceil() as usize
+    }
+
+    #[test]
+    fn ellipses_are_refused_never_coarsened() {
+        let one = |e: Entity, tol: f64| {
+            let mut d = Drawing::new();
+            d.add_entity(e);
+            expand_at(&d, tol)
+        };
+        // At the radius limit, at 0.001 mm: 222 144 points (the old reader stopped at 10⁵).
+        let n = ellipse_points(MAX_ARC_RADIUS_MM, 0.001);
+        assert!(n > 200_000, "{n}");
+        assert_eq!(one(ellipse(MAX_ARC_RADIUS_MM), 0.001).unwrap(), (1, n));
+        let e = one(ellipse(MAX_ARC_RADIUS_MM * (1.0 + 1e-9)), 0.001)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("b.dxf: ELLIPSE #")
+                && e.ends_with(
+                    " on layer '0': an ellipse of major radius 1.000e7 mm is too large to \
+                     flatten: the limit is 1e7 mm (MAX_ARC_RADIUS_MM)"
+                ),
+            "{e}"
+        );
+        // Points: 702 481 at 10⁻⁵ mm for 1 km are made; 2.2·10⁶ for 10 km are refused.
+        let n = ellipse_points(1e6, 1e-5);
+        assert!(n > 700_000 && n < MAX_POINTS, "{n}");
+        assert_eq!(one(ellipse(1e6), 1e-5).unwrap(), (1, n));
+        let e = one(ellipse(1e7), 1e-5).unwrap_err().to_string();
+        assert!(
+            e.starts_with("b.dxf: ELLIPSE #")
+                && e.contains(" on layer '0': flattened at 0.00001 mm the ELLIPSE")
+                && e.contains(&format!("needs {} points", ellipse_points(1e7, 1e-5) + 1))
+                && e.ends_with("the limit is 1000000 points (MAX_POINTS)"),
+            "{e}"
+        );
+        // Placed by an INSERT scaled 10×, an ellipse is flattened as the larger one it
+        // becomes; at 1000× it is over the radius limit, and the INSERT is named.
+        let scaled = |scale: f64| {
+            let mut d = Drawing::new();
+            let mut block = dxf::Block {
+                name: "E".into(),
+                ..Default::default()
+            };
+            block.entities.push(ellipse(1e4));
+            d.add_block(block);
+            d.add_entity(Entity::new(EntityType::Insert(dxf::entities::Insert {
+                name: "E".into(),
+                x_scale_factor: scale,
+                y_scale_factor: scale,
+                ..Default::default()
+            })));
+            expand_at(&d, 0.005)
+        };
+        assert_eq!(scaled(10.0).unwrap().1, ellipse_points(1e5, 0.005));
+        let e = scaled(1e4).unwrap_err().to_string();
+        assert!(
+            e.starts_with("b.dxf: INSERT of block 'E' #")
+                && e.contains(": ELLIPSE (block 'E' placed by INSERT #")
+                && e.contains("an ellipse of major radius 1.000e8 mm")
+                && e.ends_with("(MAX_ARC_RADIUS_MM)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_point_count_is_what_flattening_makes() {
+        for (bulge, chord, tol) in [
+            (1.0, 2.0, 0.005),
+            (0.3, 50.0, 0.005),
+            (-0.05, 300.0, 0.01),
+            (5.0, 1.0, 0.001),
+            (1e-9, 100.0, 0.005),
+        ] {
+            let piece = Piece {
+                vertices: vec![[0.0, 0.0, bulge], [chord, 0.0, 0.0]],
+                closed: false,
+                sources: src("ARC"),
+            };
+            let made = flatten_path(&piece.vertices, false, tol).len();
+            assert_eq!(
+                flattened_points(&piece, tol, 1.0),
+                Ok(made),
+                "{bulge} {chord}"
+            );
+            // Stretched 10× and flattened at 10× the tolerance: the same chords.
+            assert_eq!(flattened_points(&piece, tol * 10.0, 10.0), Ok(made));
+        }
+    }
+
+    #[test]
+    fn arcs_over_half_a_circle_keep_their_side() {
+        // ARC r = 10 from 0° to 270°: bulge tan(67.5°) > 1.
+        let arc = Entity::new(EntityType::Arc(dxf::entities::Arc {
+            center: dxf::Point::new(0.0, 0.0, 0.0),
+            radius: 10.0,
+            start_angle: 0.0,
+            end_angle: 270.0,
+            ..Default::default()
+        }));
+        let piece = entity_piece(&arc, src("ARC")[0].clone(), 0.005, 1.0)
+            .unwrap()
+            .unwrap();
+        assert!(piece.vertices[0][2] > 1.0, "{:?}", piece.vertices);
+        let pts = flatten_path(&piece.vertices, false, 0.005);
+        assert_eq!(flattened_points(&piece, 0.005, 1.0), Ok(pts.len()));
+        for q in &pts {
+            assert!((distance(*q, [0.0, 0.0]) - 10.0).abs() < 1e-9, "{q:?}");
+            // Nothing in the quarter the arc leaves out (x > 0, y < 0).
+            assert!(!(q[0] > 1e-6 && q[1] < -1e-6), "{q:?}");
+        }
+        let (first, last) = (pts[0], pts[pts.len() - 1]);
+        assert!(distance(first, [10.0, 0.0]) < 1e-9 && distance(last, [0.0, -10.0]) < 1e-9);
+        assert!(
+            pts.iter().any(|q| distance(*q, [-10.0, 0.0]) < 0.5),
+            "passes 180°"
+        );
+    }
+
+    #[test]
+    fn arc_radius_limit_and_flat_arcs() {
+        // A half circle of radius exactly the limit is flattened; a hair larger is refused.
+        let half = |r: f64| Piece {
+            vertices: vec![[0.0, 0.0, 1.0], [2.0 * r, 0.0, 0.0]],
+            closed: false,
+            sources: src("ARC"),
+        };
+        let n = flattened_points(&half(MAX_ARC_RADIUS_MM), 0.005, 1.0).unwrap();
+        assert!(n > 1000 && n < MAX_POINTS, "{n}");
+        let r = flattened_points(&half(MAX_ARC_RADIUS_MM * (1.0 + 1e-9)), 0.005, 1.0);
+        assert!(r.is_err_and(|r| r > MAX_ARC_RADIUS_MM));
+        // A bulge of radius 10¹⁴ mm over 100 mm sags 1.25e-11 mm: it is its chord.
+        let flat = [[0.0, 0.0, 5e-13], [100.0, 0.0, 0.0]];
+        assert_eq!(
+            flatten_path(&flat, false, 0.005),
+            vec![[0.0, 0.0], [100.0, 0.0]]
+        );
     }
 }

@@ -23,6 +23,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use cell_geometry::{ring_perimeter, Norm};
 use serde::Serialize;
 
 use crate::cost::{CostParams, EvalError, Evaluator};
@@ -273,6 +274,16 @@ pub enum JobError {
         /// The contours and why.
         error: Box<CutError>,
     },
+    /// The layout's sheet at the raster's `cell_mm` is over
+    /// [`crate::thermal::MAX_RASTER_CELLS`], or its contours' cutting over
+    /// [`crate::thermal::MAX_CUT_STEPS`] raster steps.
+    #[error("{source_name}: {error}")]
+    Raster {
+        /// The file or `<layout_json>`.
+        source_name: String,
+        /// The sheet, the cell size and the limit.
+        error: SequencerParamError,
+    },
     /// A part lies outside the machine's travel once the sheet is placed.
     #[error("{source_name}: {error}")]
     OutOfTravel {
@@ -399,6 +410,31 @@ pub fn load_placed_problem(
     if let Some(origin) = job.sheet_origin {
         layout.origin = origin;
     }
+    // The raster the sheet needs, before any work on the layout (issue 23: a 10¹² mm sheet);
+    // a sheet that is no size at all is the layout's error, below.
+    job.thermal.validate()?;
+    job.pierce_options.validate()?;
+    if layout.sheet.iter().all(|v| v.is_finite() && *v > 0.0) {
+        job.thermal
+            .raster_size(layout.sheet)
+            .map_err(|error| JobError::Raster {
+                source_name: name.clone(),
+                error,
+            })?;
+    }
+    // And the raster steps cutting the drawn contours takes (a comb of long thin teeth).
+    let cut_mm: f64 = layout
+        .parts
+        .iter()
+        .flat_map(|p| std::iter::once(&p.outer).chain(&p.holes))
+        .map(|r| ring_perimeter(&r.points, Norm::Hypot))
+        .sum();
+    job.thermal
+        .check_cut_steps(cut_mm)
+        .map_err(|error| JobError::Raster {
+            source_name: name.clone(),
+            error,
+        })?;
     let placement = SheetPlacement {
         rule,
         size_mm: layout.sheet,
@@ -681,6 +717,64 @@ mod tests {
         let steps = (out.plan.time_s / job.thermal.dt_s()).round() as u64;
         let expected: Vec<u64> = (1..=steps / every).map(|k| every * k).collect();
         assert_eq!(frames, expected);
+    }
+
+    /// A comb of `teeth` teeth 1 mm wide and 9 m long on a 10 × 10 m sheet: ~18 m of cut each.
+    fn comb(teeth: usize) -> String {
+        let mut points = vec![[0.0, 0.0]];
+        for t in 0..teeth {
+            let x = 1.0 + 2.0 * t as f64;
+            points.extend([[x, 0.0], [x, 9000.0], [x + 1.0, 9000.0], [x + 1.0, 0.0]]);
+        }
+        points.push([2.0 * teeth as f64 + 1.0, -0.0]);
+        points.push([2.0 * teeth as f64 + 1.0, -1.0]);
+        points.push([0.0, -1.0]);
+        let pts: Vec<String> = points
+            .iter()
+            .map(|p| format!("[{},{}]", p[0], p[1] + 1.0))
+            .collect();
+        format!(
+            r#"{{"sheet":[10000,10000],"parts":[{{"name":"comb","outer":{{"points":[{}]}}}}]}}"#,
+            pts.join(",")
+        )
+    }
+
+    #[test]
+    fn contours_over_the_cut_step_limit_are_refused_before_any_work() {
+        let job = |teeth: usize| SheetJob {
+            layout: LayoutSource::Json(comb(teeth)),
+            improve: false,
+            ..Default::default()
+        };
+        // 2000 teeth: 3.6·10⁷ mm, 9·10⁶ steps at 4 mm, is loaded.
+        let p = load_problem(&job(2000)).unwrap();
+        assert_eq!(p.contours.len(), 1);
+        let e = load_problem(&job(3000)).unwrap_err().to_string();
+        assert!(
+            e.starts_with("<layout_json>: the contours' cut length of 54")
+                && e.ends_with(
+                    "mm at cell_mm = 4 mm is 1.350e7 raster steps: the limit is 10000000 steps \
+                     (MAX_CUT_STEPS)"
+                ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_sheet_over_the_raster_limit_is_refused_before_any_work() {
+        let job = SheetJob {
+            layout: LayoutSource::Json(
+                r#"{"sheet":[1e12,1e12],"parts":[{"outer":{"points":[[10,10],[60,10],[60,60]]}}]}"#
+                    .into(),
+            ),
+            ..Default::default()
+        };
+        let e = load_problem(&job).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "<layout_json>: sheet 1000000000000 × 1000000000000 mm at cell_mm = 4 mm is a \
+             raster of 6.250e22 cells: the limit is 100000000 cells (MAX_RASTER_CELLS)"
+        );
     }
 
     #[test]

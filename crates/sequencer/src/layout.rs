@@ -32,15 +32,24 @@
 //! contour, and an outer contour must not lie directly inside another outer contour (it would
 //! overlap that part's material); both are errors naming the part. The shipped example is
 //! `tests/data/sheet/example.json`.
+//!
+//! **Size.** A layout holds at most [`MAX_POINTS`] points in all (the DXF reader's limit,
+//! issue 23) and [`MAX_CONTOURS`] contours; both are counted while the JSON is read, so a file
+//! of millions of points or rings is refused at the first one over, naming the file, line and
+//! field, before the rest is read.
 
+use std::cell::Cell;
 use std::path::Path;
 
 use cell_geometry::{distance_to_rings, point_in_ring_nonzero, Norm};
+use serde::de::{Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 use crate::containment::{check_ring, dedup_ring, find_crossing, ContainmentTree, GeometryError};
+use crate::dxf::MAX_POINTS;
 use crate::precedence::{Precedence, PrecedenceMode, Violation};
 use crate::problem::{distance, Contour, ContourId, ContourRole, Point, Problem};
+use crate::thermal::{require, SequencerParamError};
 
 /// A nested sheet layout (seed 003 §A1).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -56,11 +65,69 @@ pub struct Layout {
     #[serde(default, skip_serializing_if = "is_zero")]
     pub origin: Point,
     /// The parts `S_i`.
+    #[serde(deserialize_with = "parts_counting_points")]
     pub parts: Vec<Part>,
 }
 
 fn is_zero(p: &Point) -> bool {
     *p == [0.0, 0.0]
+}
+
+/// Most contours (outer contours and holes) a JSON layout may hold (issue 23): as many as the
+/// DXF reader may place entities ([`crate::dxf::MAX_PLACED_ENTITIES`]); a 500-part sheet has
+/// a few thousand. A 64 MiB file of empty rings is 2.7·10⁶ of them (4 s and 400 MB to read).
+pub const MAX_CONTOURS: usize = 250_000;
+
+thread_local! {
+    /// Contours and points read so far of the layout being deserialised on this thread
+    /// ([`MAX_CONTOURS`], [`MAX_POINTS`]); reset where its `parts` begin. Serde's derive has
+    /// no per-document state, and a layout is read on one thread from start to end.
+    static READ: Cell<(usize, usize)> = const { Cell::new((0, 0)) };
+}
+
+/// A layout's `parts`, counting their contours and points from zero
+/// ([`points_within_limit`]).
+fn parts_counting_points<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Part>, D::Error> {
+    READ.set((0, 0));
+    Vec::<Part>::deserialize(d)
+}
+
+/// A ring's `points`, refused as soon as the layout's contours pass [`MAX_CONTOURS`] or its
+/// points [`MAX_POINTS`] (issue 23: a 64 MiB file holds ~10⁷ points, and the containment and
+/// precedence steps after it are superlinear), so no more of the file is read.
+fn points_within_limit<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Point>, D::Error> {
+    struct Points;
+    impl<'de> Visitor<'de> for Points {
+        type Value = Vec<Point>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a list of [x, y] points")
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+            let (contours, mut points) = READ.get();
+            let contours = contours + 1;
+            READ.set((contours, points));
+            if contours > MAX_CONTOURS {
+                return Err(serde::de::Error::custom(format!(
+                    "the layout has more than {MAX_CONTOURS} contours: the limit is \
+                     {MAX_CONTOURS} contours (MAX_CONTOURS)"
+                )));
+            }
+            let mut out: Vec<Point> = Vec::new();
+            while let Some(p) = seq.next_element()? {
+                points += 1;
+                READ.set((contours, points));
+                if points > MAX_POINTS {
+                    return Err(serde::de::Error::custom(format!(
+                        "the layout has more than {MAX_POINTS} points: the limit is \
+                         {MAX_POINTS} points (MAX_POINTS)"
+                    )));
+                }
+                out.push(p);
+            }
+            Ok(out)
+        }
+    }
+    d.deserialize_seq(Points)
 }
 
 /// One part `S_i`: an outer contour `C_i1` and its holes `C_ij`, j > 1 (seed 003 §A1).
@@ -82,6 +149,7 @@ pub struct Part {
 #[serde(deny_unknown_fields)]
 pub struct Ring {
     /// Closed polyline, mm, first point not repeated.
+    #[serde(deserialize_with = "points_within_limit")]
     pub points: Vec<Point>,
     /// Fixed pierce point, mm; `None` = free (candidates from [`PierceOptions`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -160,6 +228,25 @@ pub struct PierceOptions {
     /// most this far from the contour, mm, and only on the scrap side (outside an outer
     /// contour, inside a hole), so the lead-in never scars the part.
     pub max_lead_in_mm: f64,
+}
+
+/// Most free pierce candidates per contour (issue 23): 8× the default; the cost tables and
+/// the improvement's pierce re-selection at every position grow with it.
+pub const MAX_PIERCE_CANDIDATES: usize = 64;
+
+impl PierceOptions {
+    /// Checks the sizes it sets.
+    ///
+    /// # Errors
+    /// `max_candidates` over [`MAX_PIERCE_CANDIDATES`], named.
+    pub fn validate(&self) -> Result<(), SequencerParamError> {
+        require(
+            self.max_candidates <= MAX_PIERCE_CANDIDATES,
+            "pierce_options.max_candidates",
+            self.max_candidates,
+            "must be in [0, 64] (MAX_PIERCE_CANDIDATES)",
+        )
+    }
 }
 
 impl Default for PierceOptions {
@@ -768,6 +855,77 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("pierse"), "{e}");
+    }
+
+    /// A layout of `n` points: a triangle, then one ring of `n - 3` points.
+    fn layout_of_points(n: usize) -> String {
+        let ring: Vec<String> = (0..n - 3).map(|i| format!("[{},1]", i % 7)).collect();
+        format!(
+            r#"{{"sheet":[10,10],"parts":[{{"outer":{{"points":[[0,0],[1,0],[0,1]]}}}},
+{{"name":"many","outer":{{"points":[{}]}}}}]}}"#,
+            ring.join(",")
+        )
+    }
+
+    #[test]
+    fn pierce_candidates_are_capped() {
+        let at = PierceOptions {
+            max_candidates: MAX_PIERCE_CANDIDATES,
+            ..Default::default()
+        };
+        assert_eq!(at.validate(), Ok(()));
+        let e = PierceOptions {
+            max_candidates: MAX_PIERCE_CANDIDATES + 1,
+            ..at
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            e,
+            "parameter `pierce_options.max_candidates` = 65: must be in [0, 64] \
+             (MAX_PIERCE_CANDIDATES)"
+        );
+    }
+
+    #[test]
+    fn layout_contours_are_capped() {
+        let of = |n: usize| {
+            let ring = r#"{"outer":{"points":[[0,0],[1,0],[0,1]]}}"#;
+            format!(
+                r#"{{"sheet":[10,10],"parts":[{}]}}"#,
+                vec![ring; n].join(",\n")
+            )
+        };
+        let at = Layout::from_json_str(&of(MAX_CONTOURS), "at.json").unwrap();
+        assert_eq!(at.contour_count(), MAX_CONTOURS);
+        let e = Layout::from_json_str(&of(MAX_CONTOURS + 1), "over.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("over.json:250001: field `parts[250000].outer.points`")
+                && e.ends_with(
+                    "more than 250000 contours: the limit is 250000 contours (MAX_CONTOURS)"
+                ),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn layout_points_are_capped_across_rings() {
+        let at = Layout::from_json_str(&layout_of_points(MAX_POINTS), "at.json").unwrap();
+        let read: usize = at.parts.iter().map(|p| p.outer.points.len()).sum();
+        assert_eq!(read, MAX_POINTS);
+        // The count starts again with every layout.
+        Layout::from_json_str(&layout_of_points(MAX_POINTS), "again.json").unwrap();
+        let e = Layout::from_json_str(&layout_of_points(MAX_POINTS + 1), "over.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("over.json:2: field `parts[1].outer.points`")
+                && e.contains("more than 1000000 points: the limit is 1000000 points (MAX_POINTS)"),
+            "{e}"
+        );
     }
 
     #[test]

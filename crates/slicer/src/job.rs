@@ -145,6 +145,24 @@ pub enum JobError {
         /// Sections in the design.
         sections: usize,
     },
+    /// The part at this layer height needs more than [`MAX_DEPOSIT_LAYERS`] layers.
+    #[error(
+        "{file}: layer_height_mm = {layer_height_mm} mm makes {layers} layers of the part's \
+         {height_mm} mm (with the machining allowance): the limit is {max} layers \
+         (MAX_DEPOSIT_LAYERS)"
+    )]
+    TooManyLayers {
+        /// The STL.
+        file: String,
+        /// The layer height, mm.
+        layer_height_mm: f64,
+        /// Layers it would take.
+        layers: f64,
+        /// The part's height, mm.
+        height_mm: f64,
+        /// [`MAX_DEPOSIT_LAYERS`].
+        max: usize,
+    },
     /// [`run`] slices meshes; wing specs go to [`crate::wing::run_wing`].
     #[error("{0}: a wing spec is not a mesh: run it with cell_slicer::wing::run_wing")]
     NotAMesh(String),
@@ -173,6 +191,17 @@ pub(crate) fn check_stop(
     } else {
         Ok(())
     }
+}
+
+/// Most deposit layers one part may take (issue 23: a 1e-9 mm layer height). A 2 m part at
+/// 1 mm WAAM layers is 2 000; the limit is 10× that. The slab step (a quarter layer) then
+/// stays within 4× the limit of planes, and the layer loop within seconds.
+pub const MAX_DEPOSIT_LAYERS: usize = 20_000;
+
+/// Layers [`crate::slab::deposit_layers`] makes of a part `height_mm` high with `allowance_mm`
+/// of machining allowance at layer height `h`: `⌈(height + allowance)/h⌉`.
+fn deposit_layer_count(height_mm: f64, allowance_mm: f64, h: f64) -> f64 {
+    ((height_mm + allowance_mm) / h).ceil()
 }
 
 /// Loads a process profile: `""` or `"waam"` is the built-in `config/processes/waam.yaml`,
@@ -524,6 +553,16 @@ pub fn run_until(
             file: name.clone(),
             height_mm: hi[2] - lo[2],
             layer_height_mm: h,
+        });
+    }
+    let layers = deposit_layer_count(hi[2] - lo[2], job.process.machining_allowance_mm, h);
+    if layers > MAX_DEPOSIT_LAYERS as f64 {
+        return Err(JobError::TooManyLayers {
+            file: name.clone(),
+            layer_height_mm: h,
+            layers,
+            height_mm: hi[2] - lo[2],
+            max: MAX_DEPOSIT_LAYERS,
         });
     }
     // The deposit regions, layer by layer, with progress and the stop hook (thin layers make
@@ -966,6 +1005,32 @@ mod tests {
         j.layer_height_mm = Some(-1.0);
         let e = run(&j, |_| {}).unwrap_err().to_string();
         assert!(e.contains("layer_height_mm"), "{e}");
+    }
+
+    #[test]
+    fn deposit_layers_are_capped() {
+        // 20 000 layers of 2⁻¹⁰ mm, exactly.
+        let (height, allowance, h) = (18.53125, 1.0, 1.0 / 1024.0);
+        assert_eq!(deposit_layer_count(height, allowance, h), 20_000.0);
+        assert_eq!(
+            deposit_layer_count(height, allowance, h * (1.0 - 1e-9)),
+            20_001.0
+        );
+        let mut j = job("20mm-xyz-cube.stl");
+        j.layer_height_mm = Some(1e-9);
+        let t0 = std::time::Instant::now();
+        let e = run(&j, |_| {}).unwrap_err();
+        assert!(t0.elapsed().as_secs_f64() < 5.0, "{:?}", t0.elapsed());
+        assert!(
+            matches!(e, JobError::TooManyLayers { max: 20_000, .. }),
+            "{e}"
+        );
+        let e = e.to_string();
+        assert!(
+            e.contains("20mm-xyz-cube.stl: layer_height_mm = 0.000000001 mm makes")
+                && e.ends_with("the limit is 20000 layers (MAX_DEPOSIT_LAYERS)"),
+            "{e}"
+        );
     }
 
     /// A binary STL of `tris` (mm) at `path`.

@@ -13,19 +13,18 @@ use std::time::Instant;
 use cell_geometry::{orientation, Orientation};
 use cell_msgs::std_msgs::Header;
 use cell_msgs::{LayerStack, Polygon2, SliceLayer, Toolpath};
-use cell_wing::estimate::{build_time_s, deposited_volume_mm3, mass_g, Acceleration};
+use cell_wing::estimate::{build_time_s, deposited_volume_mm3, mass_g};
 use cell_wing::layers::{moves, Layer, Role};
+use cell_wing::marlin::FirmwareMotion;
 use cell_wing::section::Side;
 use cell_wing::spec::{Wing, WingSpec};
 use serde::Serialize;
 
 use crate::job::{check_stop, JobError, JobProgress, Phase};
 
-/// Marlin's stock acceleration and junction deviation, for the second build-time figure.
-pub const MARLIN_ACCELERATION: Acceleration = Acceleration {
-    accel_mm_s2: 1000.0,
-    junction_deviation_mm: 0.013,
-};
+/// Marlin 2's stock planner (acceleration, junction deviation, look-ahead, axis limits), for
+/// the second build-time figure.
+pub const MARLIN_ACCELERATION: FirmwareMotion = FirmwareMotion::MARLIN_2_DEFAULTS;
 
 /// A section's side as reports spell it.
 pub fn side_name(side: Side) -> &'static str {
@@ -58,7 +57,7 @@ pub struct SectionFigures {
     pub mass_g: f64,
     /// Σ L/v over every move, s.
     pub build_time_s: f64,
-    /// The same with Marlin's acceleration and junction deviation, s.
+    /// The time Marlin 2's planner takes with its stock settings (`cell_wing::marlin`), s.
     pub build_time_with_acceleration_s: f64,
 }
 
@@ -92,10 +91,14 @@ pub struct WingReport {
     pub airfoil: String,
     /// Span b, mm.
     pub span_mm: f64,
-    /// The design lift coefficient c_L of the lifting-line solution.
+    /// The design lift coefficient c_L of the lifting-line solution (condition 1).
     pub c_l: f64,
+    /// The design case (seed 002 Table 1), its solved planform and each condition.
+    pub design: cell_wing::design::DesignReport,
     /// Sections in the design.
     pub sections_in_design: usize,
+    /// Layers of the whole section (`section.layers` counts those printed).
+    pub layers_in_section: usize,
     /// The section printed.
     pub section: SectionFigures,
     /// Wall-clock time of the job, s.
@@ -143,6 +146,24 @@ pub fn run_wing_until(
     section: usize,
     job_id: &str,
     frame_id: &str,
+    progress: impl FnMut(JobProgress),
+    stop: &dyn Fn() -> bool,
+) -> Result<WingOutcome, JobError> {
+    run_wing_layers(spec_file, section, 0, job_id, frame_id, progress, stop)
+}
+
+/// As [`run_wing_until`], printing only the section's first `max_layers` layers (0: all), as
+/// `cell wing --layers` does: a short print of the section's base (the demo's wing job). The
+/// figures are the printed layers'; [`WingReport::layers_in_section`] keeps the whole count.
+///
+/// # Errors
+/// As [`run_wing_until`].
+pub fn run_wing_layers(
+    spec_file: &Path,
+    section: usize,
+    max_layers: usize,
+    job_id: &str,
+    frame_id: &str,
     mut progress: impl FnMut(JobProgress),
     stop: &dyn Fn() -> bool,
 ) -> Result<WingOutcome, JobError> {
@@ -163,11 +184,15 @@ pub fn run_wing_until(
     let sections = wing.sections.len();
     check_stop(stop, 0, 0)?;
     progress(at(Phase::Slice, 0, 0));
-    let layers = wing.layers(section).ok_or(JobError::WingSection {
+    let mut layers = wing.layers(section).ok_or(JobError::WingSection {
         file: file.clone(),
         section,
         sections,
     })?;
+    let layers_in_section = layers.len();
+    if max_layers > 0 {
+        layers.truncate(max_layers);
+    }
     let total = layers.len();
     let bp = wing.spec.build_params();
     let mut stack_layers = Vec::with_capacity(total);
@@ -203,7 +228,9 @@ pub fn run_wing_until(
         airfoil: wing.spec.airfoil.display().to_string(),
         span_mm: wing.spec.aero.span_mm,
         c_l: wing.aero.c_l,
+        design: wing.design_report(),
         sections_in_design: sections,
+        layers_in_section,
         section: figures,
         runtime_s: t0.elapsed().as_secs_f64(),
     };

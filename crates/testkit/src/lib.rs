@@ -14,5 +14,5 @@ mod venv;
 
 pub use interpreter::{linuxcnc_interpreter, linuxcnc_interpreter_here};
 pub use jazzy::{jazzy_workspace, JazzyEnv};
-pub use tool::{require_tool, under_ci};
-pub use venv::venv_python;
+pub use tool::{require_command, require_tool, under_ci};
+pub use venv::{venv_python, venv_python_with};

@@ -25,3 +25,19 @@ pub fn require_tool(tool: &str, found: Result<(), String>, how_to_install: &str)
     let _ = std::io::stderr().write_all(line.as_bytes());
     false
 }
+
+/// [`require_tool`] for a command on the PATH: found when `command version_arg` runs and
+/// exits 0 (e.g. `openssl version`, `openscad --version`).
+pub fn require_command(command: &str, version_arg: &str, how_to_install: &str) -> bool {
+    let found = std::process::Command::new(command)
+        .arg(version_arg)
+        .output()
+        .map_err(|e| e.to_string())
+        .and_then(|o| {
+            o.status
+                .success()
+                .then_some(())
+                .ok_or_else(|| format!("`{command} {version_arg}` failed"))
+        });
+    require_tool(command, found, how_to_install)
+}

@@ -20,6 +20,18 @@ pub fn venv_python(
     requirements: &Path,
     import: &str,
 ) -> Option<PathBuf> {
+    venv_python_with(tmp_dir, name, requirements, import, &[])
+}
+
+/// As [`venv_python`], with more `pip install` options, e.g. `--no-deps` for a package whose
+/// declared dependencies (a GUI toolkit) the test does not need and cannot build.
+pub fn venv_python_with(
+    tmp_dir: &Path,
+    name: &str,
+    requirements: &Path,
+    import: &str,
+    pip_options: &[&str],
+) -> Option<PathBuf> {
     static MADE: Mutex<Option<HashMap<PathBuf, Result<(), String>>>> = Mutex::new(None);
     if let Ok(python) = std::env::var("CELL_TEST_PYTHON") {
         return Some(PathBuf::from(python));
@@ -30,7 +42,7 @@ pub fn venv_python(
         .unwrap_or_else(|e| e.into_inner())
         .get_or_insert_with(HashMap::new)
         .entry(venv.clone())
-        .or_insert_with(|| make_venv(&venv, requirements, import))
+        .or_insert_with(|| make_venv(&venv, requirements, import, pip_options))
         .clone();
     require_tool(
         &format!("the PyPI packages of {}", requirements.display()),
@@ -41,7 +53,12 @@ pub fn venv_python(
 }
 
 /// Creates (or completes) the venv of [`venv_python`]: `Err` when Python, venv or pip fails.
-fn make_venv(venv: &Path, requirements: &Path, import: &str) -> Result<(), String> {
+fn make_venv(
+    venv: &Path,
+    requirements: &Path,
+    import: &str,
+    pip_options: &[&str],
+) -> Result<(), String> {
     let python = venv.join("bin/python");
     let stamp = venv.join("requirements.installed");
     let wanted = std::fs::read_to_string(requirements)
@@ -64,8 +81,9 @@ fn make_venv(venv: &Path, requirements: &Path, import: &str) -> Result<(), Strin
             "install",
             "--quiet",
             "--disable-pip-version-check",
-            "-r",
         ])
+        .args(pip_options)
+        .arg("-r")
         .arg(requirements))?;
     std::fs::write(&stamp, &wanted).map_err(|e| format!("{}: {e}", stamp.display()))?;
     assert!(

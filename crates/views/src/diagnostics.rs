@@ -5,6 +5,8 @@ use cell_msgs::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
 use cell_msgs::std_msgs::Header;
 use cell_msgs::MachineStatus;
 
+use crate::HeaterReading;
+
 /// The diagnostic level of a machine state: idle, running and done are OK; hold and unknown
 /// are WARN (someone should look); alarm and disconnected are ERROR.
 pub fn level(state: u8) -> u8 {
@@ -33,8 +35,15 @@ pub fn state_name(state: u8) -> &'static str {
 /// One status per machine, named `<reporter>: <machine_id>` (the `node: component` convention
 /// of `diagnostic_updater`), hardware id the machine id, level by [`level`], message the state
 /// (and the alarm text, if any), and values `state`, `job_id`, `acked_line`, `total_lines`,
-/// `buffer_fill`, `feed_mm_s` and each axis (`axis/<name>` in mm or deg, as reported).
-pub fn diagnostics(reporter: &str, statuses: &[MachineStatus], stamp: Time) -> DiagnosticArray {
+/// `buffer_fill`, `feed_mm_s`, each axis (`axis/<name>` in mm or deg, as reported) and each of
+/// the machine's heaters in `heaters` (`heater/<name>/current_c` and `heater/<name>/target_c`,
+/// °C; target 0: off).
+pub fn diagnostics(
+    reporter: &str,
+    statuses: &[MachineStatus],
+    heaters: &[HeaterReading],
+    stamp: Time,
+) -> DiagnosticArray {
     let status = statuses
         .iter()
         .map(|s| {
@@ -60,6 +69,16 @@ pub fn diagnostics(reporter: &str, statuses: &[MachineStatus], stamp: Time) -> D
                     .zip(&s.axis_positions)
                     .map(|(a, p)| kv(&format!("axis/{a}"), p.to_string())),
             );
+            for h in heaters.iter().filter(|h| h.machine_id == s.machine_id) {
+                values.push(kv(
+                    &format!("heater/{}/current_c", h.heater),
+                    h.current_c.to_string(),
+                ));
+                values.push(kv(
+                    &format!("heater/{}/target_c", h.heater),
+                    h.target_c.to_string(),
+                ));
+            }
             DiagnosticStatus {
                 level: level(s.state),
                 name: format!("{reporter}: {}", s.machine_id),
@@ -102,7 +121,26 @@ mod tests {
                 ..Default::default()
             },
         ];
-        let array = diagnostics("machine_bridge", &statuses, Time { sec: 5, nanosec: 0 });
+        let heaters = [
+            HeaterReading {
+                machine_id: "grbl-sim".into(),
+                heater: "hotend".into(),
+                current_c: 187.5,
+                target_c: 210.0,
+            },
+            HeaterReading {
+                machine_id: "other".into(),
+                heater: "bed".into(),
+                current_c: 60.0,
+                target_c: 60.0,
+            },
+        ];
+        let array = diagnostics(
+            "machine_bridge",
+            &statuses,
+            &heaters,
+            Time { sec: 5, nanosec: 0 },
+        );
         assert_eq!(array.header.stamp.sec, 5);
         let [grbl, abb] = &array.status[..] else {
             panic!("two statuses")
@@ -120,6 +158,14 @@ mod tests {
         };
         assert_eq!(value("acked_line"), Some("12"));
         assert_eq!(value("axis/X"), Some("12.5"));
+        assert_eq!(value("heater/hotend/current_c"), Some("187.5"));
+        assert_eq!(value("heater/hotend/target_c"), Some("210"));
+        assert_eq!(
+            value("heater/bed/current_c"),
+            None,
+            "another machine's heater"
+        );
+        assert!(!abb.values.iter().any(|kv| kv.key.starts_with("heater/")));
         assert_eq!(abb.level, DiagnosticStatus::ERROR);
         assert_eq!(abb.message, "alarm: ALARM:1 hard limit");
         assert_eq!(level(MachineStatus::STATE_HOLD), DiagnosticStatus::WARN);

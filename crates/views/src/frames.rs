@@ -41,6 +41,12 @@ pub fn tool(machine_id: &str) -> String {
     format!("{}/tool", machine(machine_id))
 }
 
+/// A machine's heater's frame (`sensor_msgs/Temperature`'s frame id): `<machine frame>/<heater>`,
+/// e.g. `marlin-sim/hotend`.
+pub fn heater(machine_id: &str, heater: &str) -> String {
+    format!("{}/{heater}", machine(machine_id))
+}
+
 /// The identity transform that puts `frame` at [`CELL`]'s origin (for `/tf_static`), or `None`
 /// when `frame` is [`CELL`] itself.
 pub fn attach_to_cell(frame: &str, stamp: Time) -> Option<TransformStamped> {

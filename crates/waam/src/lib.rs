@@ -48,7 +48,7 @@ pub mod to_msg;
 pub mod toolpath;
 pub mod torch;
 
-pub use process::{ProcessError, WaamProcess, WidthMode};
+pub use process::{ProcessError, WaamProcess, WidthMode, MAX_PERIMETERS};
 pub use toolpath::{
     plan_layer, plan_stack, LayerPolygons, LayerToolpath, PathPoint, Segment, SegmentKind,
     SegmentRole, ToolpathError,

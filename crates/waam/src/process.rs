@@ -148,6 +148,11 @@ impl Default for WaamProcess {
     }
 }
 
+/// Most perimeter loops per contour (issue 23: every size has a limit; the loop over them
+/// runs once per count, even after the region is used up). The thesis uses 1, walls rarely
+/// take more than 5; the limit is 10× that.
+pub const MAX_PERIMETERS: usize = 50;
+
 impl WaamProcess {
     /// Parses and checks a YAML profile; `file` labels errors.
     ///
@@ -217,6 +222,10 @@ impl WaamProcess {
         ] {
             check(field, v, Allowed::NON_NEGATIVE, unit)?;
         }
+        Allowed::closed(0.0, MAX_PERIMETERS as f64)
+            .whole()
+            .check(self.perimeters as f64, "")
+            .map_err(|e| invalid("perimeters", e.because("MAX_PERIMETERS").into()))?;
         for (field, v) in [
             ("infill_angle_deg", self.infill_angle_deg),
             ("infill_layer_rotation_deg", self.infill_layer_rotation_deg),
@@ -286,5 +295,22 @@ impl WaamProcess {
             self.width_min_mm.map_or(lo, |m| m.max(lo)),
             self.width_max_mm.map_or(hi, |m| m.min(hi)),
         )
+    }
+}
+
+#[cfg(test)]
+mod size_limits {
+    use super::*;
+
+    #[test]
+    fn perimeters_at_the_limit_pass_and_one_more_is_refused() {
+        assert!(WaamProcess::from_yaml_str("perimeters: 50\n", "p.yaml").is_ok());
+        let e = WaamProcess::from_yaml_str("perimeters: 51\n", "p.yaml")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "p.yaml: field `perimeters`: 51 is out of range: must be in [0, 50] (MAX_PERIMETERS)"
+        );
     }
 }

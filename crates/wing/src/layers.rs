@@ -125,11 +125,21 @@ impl Planform {
 ///
 /// Layer count n = ⌈(b_sect − h₀)/h⌉ + 1 (notes); layer k sits at Z = h₀ + k·h (the last may
 /// overshoot the section top by less than h) and takes chord, twist and spars at y = y_bed ±
-/// Z. Each layer: the perimeter (the transformed airfoil points, no offset, TE → lower → LE →
-/// upper → TE, closed), then on layer 0 a serpentine rib of chord-normal lines at pitch w
-/// (deposit links instead of the repo's G0 links: one continuous stroke, no retracts), on the
-/// others one stroke per spar, TE → LE, alternating the end they start from. Spar and rib lines
-/// stop `spar_overlap`·w inside each skin and are left out where that leaves no line.
+/// Z. Each layer: the perimeter (the transformed airfoil points, no offset, in the direction
+/// TE → lower → LE → upper → TE, closed), then on layer 0 a serpentine rib of chord-normal
+/// lines at pitch w, TE → LE (deposit links instead of the repo's G0 links: one continuous
+/// stroke, no retracts), on the others one stroke per spar, alternating the end they start
+/// from. Spar and rib lines stop `spar_overlap`·w inside each skin and are left out where that
+/// leaves no line.
+///
+/// **Order (fewer travel moves).** Layer 0's perimeter starts at the TE. Every later layer
+/// starts where the one below ended: its perimeter starts (and closes) at the outline point
+/// nearest the previous layer's last point (the seam: a point inserted on the outline's edge,
+/// so the outline is unchanged), and its spars run from the end of the spar row (TE-most or
+/// LE-most spar, upper or lower end) nearest that seam to the other. So layers alternate
+/// TE → LE and LE → TE, the seam sits at the front or rear spar's junction with the skin, and
+/// no layer travels back a chord to a fixed start (the repo's and our first order did: on the
+/// Table 2 root section 317 mm of travel a layer).
 ///
 /// Section transform (notes, per-layer transform): x' = x − x_h, z' = z − z_LS(x_h) −
 /// p_z·τ(x_h); scale by c; rotate nose up by the twist; mirror x on the right wing; the hinge
@@ -163,6 +173,7 @@ pub fn section_layers(
     let xh = p.hinge_x_over_c;
     let zh = surf.z_lower(xh) + p.hinge_z_over_t * surf.thickness(xh);
     let w = p.extrusion_width_mm;
+    let mut previous_end: Option<[f64; 3]> = None;
     zs.iter()
         .enumerate()
         .map(|(k, &z)| {
@@ -188,7 +199,11 @@ pub fn section_layers(
                 .rev()
                 .map(|q| to_machine(q.x, q.y))
                 .collect();
+            if let Some(end) = previous_end {
+                outline = seam_nearest(&outline, end);
+            }
             outline.push(outline[0]);
+            let seam = outline[0];
             strokes.push(Stroke {
                 role: Role::Perimeter,
                 points: outline,
@@ -229,18 +244,39 @@ pub fn section_layers(
             } else {
                 let mut xs = spars.at(y / planform.span_mm);
                 xs.sort_by(|a, b| b.total_cmp(a));
-                let mut upper = true;
-                for x in xs {
-                    if let Some(l) = line(x, upper) {
-                        strokes.push(Stroke {
-                            role: Role::Spar,
-                            points: l.to_vec(),
-                            feed_mm_s: speed(p.infill_speed_mm_s),
-                        });
-                        upper = !upper;
-                    }
+                // Each spar as (upper end, lower end), TE → LE; then the row walked from the
+                // end nearest the seam (ties keep TE → LE from the upper skin).
+                let mut row: Vec<[[f64; 3]; 2]> =
+                    xs.into_iter().filter_map(|x| line(x, true)).collect();
+                let gap = |q: [f64; 3]| cell_geometry::distance3(q, seam);
+                let (te_first, upper_first) =
+                    [(true, true), (true, false), (false, true), (false, false)]
+                        .into_iter()
+                        .filter(|_| !row.is_empty())
+                        .min_by(|a, b| {
+                            let first = |(te, up): (bool, bool)| {
+                                let s = if te { row[0] } else { row[row.len() - 1] };
+                                gap(s[usize::from(!up)])
+                            };
+                            first(*a).total_cmp(&first(*b))
+                        })
+                        .unwrap_or((true, true));
+                if !te_first {
+                    row.reverse();
+                }
+                let mut upper = upper_first;
+                for [a, b] in row {
+                    strokes.push(Stroke {
+                        role: Role::Spar,
+                        points: if upper { vec![a, b] } else { vec![b, a] },
+                        feed_mm_s: speed(p.infill_speed_mm_s),
+                    });
+                    upper = !upper;
                 }
             }
+            previous_end = strokes
+                .last()
+                .and_then(|s: &Stroke| s.points.last().copied());
             Layer {
                 index: k as u32,
                 z_mm: z,
@@ -252,12 +288,48 @@ pub fn section_layers(
         .collect()
 }
 
+/// `ring` (vertices, closing edge implied) started at the point of its boundary nearest to
+/// `near` in XY: that point inserted on its edge (unless it is a vertex) and the vertices
+/// rotated to follow it, in the same direction (an empty ring stays empty).
+fn seam_nearest(ring: &[[f64; 3]], near: [f64; 3]) -> Vec<[f64; 3]> {
+    let n = ring.len();
+    let xy = |q: [f64; 3]| [q[0], q[1]];
+    let Some((edge, foot)) = (0..n)
+        .map(|i| {
+            let (a, b) = (ring[i], ring[(i + 1) % n]);
+            let f = cell_geometry::closest_point_on_segment(xy(near), xy(a), xy(b));
+            (i, [f.x, f.y, a[2]])
+        })
+        .min_by(|a, b| {
+            let d = |f: [f64; 3]| (f[0] - near[0]).hypot(f[1] - near[1]);
+            d(a.1).total_cmp(&d(b.1))
+        })
+    else {
+        return Vec::new();
+    };
+    let same = |a: [f64; 3], b: [f64; 3]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9;
+    let after = (edge + 1) % n;
+    let (start, insert) = if same(foot, ring[edge]) {
+        (edge, false)
+    } else if same(foot, ring[after]) {
+        (after, false)
+    } else {
+        (after, true)
+    };
+    let mut out = Vec::with_capacity(n + 1);
+    if insert {
+        out.push(foot);
+    }
+    out.extend((0..n).map(|j| ring[(start + j) % n]));
+    out
+}
+
 /// What a [`Move`] does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MoveKind {
     /// Extruding along a stroke of this role.
     Deposit(Role),
-    /// A rapid between strokes (nozzle lifted, filament retracted).
+    /// A rapid between strokes (filament retracted; nozzle lifted where it crosses a wall).
     Travel,
     /// Filament pulled back (E only).
     Retract,
@@ -290,16 +362,28 @@ pub fn filament_area_mm2(p: &BuildParams) -> f64 {
 /// The layers as machine moves with absolute E (Algorithm 2 lines 8–15, notes' G-code
 /// details): each deposit move pushes ΔE = w·h·L/(π d_f²/4) (the notes' FlowMult 1.25 ≈ 4/π
 /// over d_f² is the same thing with the π/4 written out); between strokes the filament is
-/// retracted, the nozzle lifted by the Z-hop, moved at travel speed, lowered and primed.
+/// retracted, moved at travel speed and primed. The nozzle is lifted by the Z-hop (and lowered
+/// after) only where the travel crosses a stroke already printed in its layer
+/// ([`cell_geometry::travel_crosses_polylines`], the emitter's `z_hop_only_when_crossing`
+/// rule): a travel between spar ends inside the skin passes over nothing, and the climb to the
+/// next layer passes above everything printed (its walls are those of the layer it climbs
+/// to). Each lift and lower costs Marlin ≈ 0.25 s (Z at 5 mm/s, 100 mm/s²).
 pub fn moves(layers: &[Layer], p: &BuildParams) -> Vec<Move> {
     let area = filament_area_mm2(p);
     let mut out: Vec<Move> = Vec::new();
     let mut e = 0.0;
+    let xy = |q: &[f64; 3]| [q[0], q[1]];
+    // The strokes printed so far in this layer: the walls at the nozzle's height (the climb
+    // from the layer below passes above all of that layer's walls).
+    let mut walls: Vec<Vec<[f64; 2]>> = Vec::new();
     for layer in layers {
+        walls.clear();
         for s in &layer.strokes {
             let start = s.points[0];
             if let Some(last) = out.last().map(|m| m.to) {
                 if last != start {
+                    let lift = p.z_hop_mm > 0.0
+                        && cell_geometry::travel_crosses_polylines(xy(&last), xy(&start), &walls);
                     e -= p.retract_mm;
                     out.push(Move {
                         kind: MoveKind::Retract,
@@ -308,24 +392,28 @@ pub fn moves(layers: &[Layer], p: &BuildParams) -> Vec<Move> {
                         e_mm: e,
                     });
                     let up = |q: [f64; 3]| [q[0], q[1], q[2] + p.z_hop_mm];
-                    out.push(Move {
-                        kind: MoveKind::Lift,
-                        to: up(last),
-                        feed_mm_s: p.travel_speed_mm_s,
-                        e_mm: e,
-                    });
+                    if lift {
+                        out.push(Move {
+                            kind: MoveKind::Lift,
+                            to: up(last),
+                            feed_mm_s: p.travel_speed_mm_s,
+                            e_mm: e,
+                        });
+                    }
                     out.push(Move {
                         kind: MoveKind::Travel,
-                        to: up(start),
+                        to: if lift { up(start) } else { start },
                         feed_mm_s: p.travel_speed_mm_s,
                         e_mm: e,
                     });
-                    out.push(Move {
-                        kind: MoveKind::Lower,
-                        to: start,
-                        feed_mm_s: p.travel_speed_mm_s,
-                        e_mm: e,
-                    });
+                    if lift {
+                        out.push(Move {
+                            kind: MoveKind::Lower,
+                            to: start,
+                            feed_mm_s: p.travel_speed_mm_s,
+                            e_mm: e,
+                        });
+                    }
                     e += p.retract_mm;
                     out.push(Move {
                         kind: MoveKind::Prime,
@@ -342,6 +430,7 @@ pub fn moves(layers: &[Layer], p: &BuildParams) -> Vec<Move> {
                     e_mm: e,
                 });
             }
+            walls.push(s.points.iter().map(xy).collect());
             for w in s.points.windows(2) {
                 e += p.extrusion_width_mm * layer.height_mm * cell_geometry::distance3(w[0], w[1])
                     / area;
@@ -438,15 +527,33 @@ pub(crate) mod tests {
                     assert_eq!(per.role, Role::Perimeter);
                     assert_eq!(per.points.first(), per.points.last(), "closed perimeter");
                     assert!(per.points.iter().all(|q| q[2] == l.z_mm));
-                    // The upper-surface vertex nearest to x_h (Selig index i; reversed in the stroke).
+                    // The upper-surface vertex nearest to x_h (Selig index i; reversed in the
+                    // ring, at n − 1 − i).
+                    let n = perimeter.len();
                     let i = perimeter
                         .iter()
                         .enumerate()
-                        .filter(|(i, _)| *i <= perimeter.len() / 2)
+                        .filter(|(i, _)| *i <= n / 2)
                         .min_by(|a, b| (a.1.x - xh).abs().total_cmp(&(b.1.x - xh).abs()))
                         .unwrap()
                         .0;
-                    let q = per.points[perimeter.len() - 1 - i];
+                    // The stroke is that ring started at the seam (after an inserted seam
+                    // point, if any); the open TE's gap, the edge farthest from the vertices'
+                    // mean (they crowd the LE), runs from ring vertex n − 1 to ring vertex 0,
+                    // which gives the rotation.
+                    let ring = &per.points[per.points.len() - 1 - n..per.points.len() - 1];
+                    let mean = ring.iter().fold([0.0; 3], |m, q| {
+                        [m[0] + q[0] / n as f64, m[1] + q[1] / n as f64, m[2]]
+                    });
+                    let far = |m: usize| {
+                        let (a, b) = (ring[m], ring[(m + 1) % n]);
+                        cell_geometry::distance3(
+                            [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0, a[2]],
+                            mean,
+                        )
+                    };
+                    let gap = (0..n).max_by(|a, b| far(*a).total_cmp(&far(*b))).unwrap();
+                    let q = ring[(n - 1 - i + gap + 1) % n];
                     [q[0], q[1]]
                 })
                 .collect();
@@ -510,5 +617,128 @@ pub(crate) mod tests {
         assert!(((r[le][0] + r[0][0]) * 0.5 - 110.0).abs() < 20.0);
         // 6° nose up at the root: the LE sits above the TE.
         assert!(r[le][1] > r[0][1] && l[le][1] > l[0][1]);
+    }
+
+    #[test]
+    fn each_layer_starts_where_the_last_ended_and_lifts_only_over_walls() {
+        let (perimeter, surf, planform, spars) = setup();
+        let p = params();
+        let section = split(400.0, 0.0, 100.0).unwrap().remove(1);
+        let layers = section_layers(&perimeter, &surf, &planform, &spars, &section, &p);
+        let mv = moves(&layers, &p);
+        for pair in layers.windows(2) {
+            let end = *pair[0].strokes.last().unwrap().points.last().unwrap();
+            let seam = pair[1].strokes[0].points[0];
+            let first_spar = pair[1].strokes[1].points[0];
+            // Spar ends sit 0.6 w = 0.3 mm inside the skin: a step up, not a trip back.
+            let xy = |a: [f64; 3], b: [f64; 3]| (a[0] - b[0]).hypot(a[1] - b[1]);
+            assert!(xy(end, seam) < 0.5, "layer {}", pair[1].index);
+            // (Layer 0's rib ends at the LE, in front of every spar.)
+            if pair[0].index > 0 {
+                assert!(xy(seam, first_spar) < 0.5, "layer {}", pair[1].index);
+            }
+        }
+        // Travel per layer: the spar row (0.1 c → 0.6 c) and the skin between its ends, not the
+        // chord back to a fixed start (≈ 1.4 c a layer before).
+        let mut travel = vec![0.0; layers.len()];
+        let mut prev = mv[0].to;
+        let mut layer = 0;
+        for m in &mv {
+            if let Some(k) = layers.iter().position(|l| l.z_mm == m.to[2]) {
+                layer = k;
+            }
+            if m.kind == MoveKind::Travel {
+                travel[layer] += (m.to[0] - prev[0]).hypot(m.to[1] - prev[1]);
+            }
+            prev = m.to;
+        }
+        for (l, t) in layers.iter().zip(&travel).skip(1) {
+            let (c, _) = planform.at(l.y_mm);
+            assert!(
+                *t < 0.7 * c,
+                "layer {}: {t:.1} mm of travel, chord {c:.1}",
+                l.index
+            );
+        }
+        // Every travel that is not lifted stays inside its layer's outline (sampled, by
+        // point-in-ring: not the crossing test the moves use); this wing needs no lift.
+        let outline_at = |z: f64| &layers.iter().find(|l| l.z_mm == z).unwrap().strokes[0];
+        let mut lifted = 0;
+        for w in mv.windows(2) {
+            if w[1].kind == MoveKind::Lift {
+                lifted += 1;
+            }
+            if w[1].kind != MoveKind::Travel || w[0].to[2] != w[1].to[2] {
+                continue;
+            }
+            let (a, b) = (w[0].to, w[1].to);
+            let outline = &outline_at(b[2]).points;
+            for k in 1..100 {
+                let t = f64::from(k) / 100.0;
+                let q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), b[2]];
+                assert!(
+                    inside(outline, q),
+                    "travel {a:?} → {b:?} leaves the outline"
+                );
+            }
+        }
+        assert_eq!(lifted, 0);
+    }
+
+    #[test]
+    fn a_travel_over_a_printed_stroke_is_lifted_and_the_others_are_not() {
+        let p = params();
+        let z = 0.5;
+        let stroke = |role, points: &[[f64; 2]]| Stroke {
+            role,
+            points: points.iter().map(|q| [q[0], q[1], z]).collect(),
+            feed_mm_s: 40.0,
+        };
+        // A square skin, a spar at x = 5, then one at x = 8 (its travel leaves the first spar's
+        // end: no crossing), then one at x = 2 (its travel from x = 8 crosses the spar at 5).
+        let layers = [Layer {
+            index: 1,
+            z_mm: z,
+            height_mm: 0.2,
+            y_mm: 0.0,
+            strokes: vec![
+                stroke(
+                    Role::Perimeter,
+                    &[
+                        [0.0, 0.0],
+                        [10.0, 0.0],
+                        [10.0, 10.0],
+                        [0.0, 10.0],
+                        [0.0, 0.0],
+                    ],
+                ),
+                stroke(Role::Spar, &[[5.0, 1.0], [5.0, 9.0]]),
+                stroke(Role::Spar, &[[8.0, 9.0], [8.0, 1.0]]),
+                stroke(Role::Spar, &[[2.0, 5.0], [2.0, 9.0]]),
+            ],
+        }];
+        let mv = moves(&layers, &p);
+        let kinds: Vec<MoveKind> = mv
+            .iter()
+            .map(|m| m.kind)
+            .filter(|k| !matches!(k, MoveKind::Deposit(_)))
+            .collect();
+        use MoveKind::{Lift, Lower, Prime, Retract, Travel};
+        assert_eq!(
+            kinds,
+            [
+                vec![Travel],
+                vec![Retract, Travel, Prime],
+                vec![Retract, Travel, Prime],
+                vec![Retract, Lift, Travel, Lower, Prime],
+            ]
+            .concat()
+        );
+        let travel = mv.iter().rfind(|m| m.kind == MoveKind::Travel).unwrap();
+        assert_eq!(travel.to, [2.0, 5.0, z + p.z_hop_mm]);
+        // Retracts and primes stay balanced: E ends at the deposited volume.
+        let deposited: f64 = layers[0].strokes.iter().map(Stroke::length_mm).sum();
+        let e = deposited * 0.5 * 0.2 / filament_area_mm2(&p);
+        assert!((mv.last().unwrap().e_mm - e).abs() < 1e-12);
     }
 }

@@ -77,6 +77,9 @@ pub struct Solution {
     pub cl_local: DVector<f64>,
     /// Wing lift coefficient c_L = 2ΣΓ̂/Σĉ (seed 002: c_L = 2L/(ρV²S)).
     pub c_l: f64,
+    /// Induced angle α_i = (n/π)·Q·Γ̂ per station \[rad\] (notes: the W·Γ̂ term of the
+    /// lifting-line equation, α = c_ℓ/a + α_i), positive as downwash.
+    pub induced_alpha_rad: DVector<f64>,
 }
 
 impl Solution {
@@ -84,6 +87,20 @@ impl Solution {
     /// assembly: "geometric section angle = LLT α + α_L0").
     pub fn geometric_alpha_rad(&self, alpha_l0_rad: f64) -> DVector<f64> {
         self.alpha_rad.add_scalar(alpha_l0_rad)
+    }
+
+    /// Induced drag coefficient C_Di = Σc_ℓ·α_i·ĉ/Σĉ = 2ΣΓ̂α_i/Σĉ: each strip's lift
+    /// tilted back by its induced angle (Kutta–Joukowski with the induced downwash; Anderson,
+    /// *Fundamentals of Aerodynamics*, §5.3). For an elliptic load α_i = c_L/(πAR) everywhere,
+    /// so C_Di = c_L²/(πAR).
+    pub fn induced_drag_coefficient(&self) -> f64 {
+        2.0 * self.gamma_hat.dot(&self.induced_alpha_rad) / self.chord_over_b.sum()
+    }
+
+    /// Span efficiency e = c_L²/(π·AR·C_Di) (1 for the elliptic load).
+    pub fn span_efficiency(&self) -> f64 {
+        self.c_l * self.c_l
+            / (std::f64::consts::PI * self.aspect_ratio() * self.induced_drag_coefficient())
     }
 
     /// Aspect ratio implied by the chord: n/Σĉ.
@@ -219,6 +236,28 @@ impl LiftingLine {
         Ok(self.solution(chord_over_b.clone(), alpha_rad.clone(), gamma))
     }
 
+    /// Direct design of one planform at several twist distributions with one factorisation
+    /// of C⁻¹ + W: a [`Solution`] per α, in order.
+    pub fn direct_many(
+        &self,
+        chord_over_b: &DVector<f64>,
+        alphas_rad: &[DVector<f64>],
+    ) -> Result<Vec<Solution>, LltError> {
+        const CASE: &str = "direct design";
+        self.check_chord(CASE, chord_over_b)?;
+        let lu = self.c_inv_plus_w(chord_over_b).lu();
+        alphas_rad
+            .iter()
+            .map(|alpha| {
+                self.check("alpha_rad", alpha)?;
+                let gamma = lu
+                    .solve(&(alpha * (0.5 * self.lift_slope_per_rad)))
+                    .ok_or_else(|| no_solution(CASE, "C⁻¹ + W is singular"))?;
+                Ok(self.solution(chord_over_b.clone(), alpha.clone(), gamma))
+            })
+            .collect()
+    }
+
     /// Single-point inverse design #1 (Table 1 row 2): c, ℓ → α = (2/a)(C⁻¹ + W)Γ̂.
     pub fn inverse_twist(
         &self,
@@ -247,6 +286,40 @@ impl LiftingLine {
         });
         self.check_chord(CASE, &chord)?;
         Ok(self.solution(chord, alpha_rad.clone(), gamma_hat.clone()))
+    }
+
+    /// Single-point inverse design #2 with the wing angle free: a twist shape t and ℓ → c and
+    /// α = α₀ + t, with the wing angle α₀ fixed by the aspect ratio Σĉ = n/AR.
+    ///
+    /// For Γ̂ > 0, ĉ_j(α₀) = Γ̂_j / (a(α₀ + t_j)/2 − (WΓ̂)_j) is positive past the last pole
+    /// α₀ > max_j(2(WΓ̂)_j/a − t_j) and Σĉ falls monotonically from +∞ to 0 there, so α₀ is
+    /// found by bisection (as in [`LiftingLine::two_lift`]); the chord then comes from
+    /// [`LiftingLine::inverse_chord`].
+    pub fn inverse_chord_at_aspect_ratio(
+        &self,
+        twist_rad: &DVector<f64>,
+        gamma_hat: &DVector<f64>,
+    ) -> Result<Solution, LltError> {
+        const CASE: &str = "single-point inverse #2";
+        self.check("twist_rad", twist_rad)?;
+        self.check("gamma_hat", gamma_hat)?;
+        if gamma_hat.iter().any(|g| *g <= 0.0) {
+            return Err(no_solution(CASE, "ℓ must be positive at every station"));
+        }
+        let wg = &self.w * gamma_hat;
+        let half_a = 0.5 * self.lift_slope_per_rad;
+        let target = self.n as f64 / self.aspect_ratio;
+        let sum = |a0: f64| {
+            (0..self.n)
+                .map(|j| gamma_hat[j] / (half_a * (a0 + twist_rad[j]) - wg[j]))
+                .sum::<f64>()
+        };
+        let lo0 = (0..self.n)
+            .map(|j| wg[j] / half_a - twist_rad[j])
+            .fold(f64::NEG_INFINITY, f64::max);
+        let a0 = falling_root_past_pole(lo0, target, sum)
+            .ok_or_else(|| no_solution(CASE, "no wing angle meets the aspect ratio"))?;
+        self.inverse_chord(&twist_rad.add_scalar(a0), gamma_hat)
     }
 
     /// Two-point inverse design #1 (Table 1 row 4): ℓ₁, ℓ₂ → c, α.
@@ -282,28 +355,8 @@ impl LiftingLine {
                 .sum::<f64>()
         };
         let lo0 = wd.max() / half_a;
-        let (mut lo, mut hi) = (lo0, lo0 + lo0.abs().max(1e-3));
-        while sum(hi) > target {
-            hi = lo0 + 2.0 * (hi - lo0);
-            if !hi.is_finite() {
-                return Err(no_solution(
-                    CASE,
-                    "no wing angle difference meets the aspect ratio",
-                ));
-            }
-        }
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid == lo || mid == hi {
-                break;
-            }
-            if sum(mid) > target {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let da = 0.5 * (lo + hi);
+        let da = falling_root_past_pole(lo0, target, sum)
+            .ok_or_else(|| no_solution(CASE, "no wing angle difference meets the aspect ratio"))?;
         let chord = DVector::from_fn(self.n, |j, _| ds[j] / (half_a * da - wd[j]));
         self.check_chord(CASE, &chord)?;
         Ok(self.two_point(chord, gamma1.clone(), s * da))
@@ -452,12 +505,14 @@ impl LiftingLine {
     fn solution(&self, chord: DVector<f64>, alpha: DVector<f64>, gamma: DVector<f64>) -> Solution {
         let cl_local = gamma.component_div(&chord) * 2.0;
         let c_l = 2.0 * gamma.sum() / chord.sum();
+        let induced_alpha_rad = (&self.q * &gamma) * (self.n as f64 / std::f64::consts::PI);
         Solution {
             chord_over_b: chord,
             alpha_rad: alpha,
             gamma_hat: gamma,
             cl_local,
             c_l,
+            induced_alpha_rad,
         }
     }
 
@@ -486,6 +541,31 @@ impl LiftingLine {
             None => Ok(()),
         }
     }
+}
+
+/// The x > `pole` where a function falling from +∞ (just past its pole) towards 0 equals
+/// `target`: the bracket doubles away from the pole until `f` drops to `target`, then bisects
+/// to the last representable step. `None` when no finite bracket is found.
+fn falling_root_past_pole(pole: f64, target: f64, f: impl Fn(f64) -> f64) -> Option<f64> {
+    let (mut lo, mut hi) = (pole, pole + pole.abs().max(1e-3));
+    while f(hi) > target {
+        hi = pole + 2.0 * (hi - pole);
+        if !hi.is_finite() {
+            return None;
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid == lo || mid == hi {
+            break;
+        }
+        if f(mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(0.5 * (lo + hi))
 }
 
 fn no_solution(case: &'static str, reason: impl Into<String>) -> LltError {
@@ -517,6 +597,31 @@ mod tests {
         assert!(
             (slope - 4.8448).abs() < 1e-3,
             "rectangular: 4.8448 /rad, got {slope}"
+        );
+    }
+
+    #[test]
+    fn induced_drag_is_least_for_the_elliptic_load() {
+        let ll = LiftingLine::new(400, 8.0, 2.0 * std::f64::consts::PI).unwrap();
+        let alpha = DVector::repeat(400, 0.1);
+        let c = ll.chord_from_shape(&ll.elliptic_shape()).unwrap();
+        let s = ll.direct(&c, &alpha).unwrap();
+        let ideal = s.c_l * s.c_l / (std::f64::consts::PI * 8.0);
+        let cdi = s.induced_drag_coefficient();
+        assert!(
+            (cdi / ideal - 1.0).abs() < 3e-3,
+            "elliptic: C_Di = c_L²/(πAR) = {ideal}, got {cdi}"
+        );
+        // Discrete: e = 1.0025 at n = 400 (α_i = α − c_ℓ/a inherits the 0.05 % of c_Lα, ×5).
+        assert!((s.span_efficiency() - 1.0).abs() < 3e-3);
+        // The equation's balance: α = c_ℓ/a + α_i at every station.
+        let back = &s.cl_local / (2.0 * std::f64::consts::PI) + &s.induced_alpha_rad;
+        assert!((back - &alpha).amax() < 1e-12);
+        let rect = ll.chord_from_shape(&DVector::repeat(400, 1.0)).unwrap();
+        let e = ll.direct(&rect, &alpha).unwrap().span_efficiency();
+        assert!(
+            (0.9..0.995).contains(&e),
+            "a rectangular AR 8 wing loses a few % (e ≈ 0.97), got {e}"
         );
     }
 
@@ -564,6 +669,12 @@ mod tests {
         // SPI #2: α, ℓ → c.
         let s2 = ll.inverse_chord(&a, &d.gamma_hat).unwrap();
         assert!(rel(&s2.chord_over_b, &c) < 1e-10);
+        // SPI #2 with the wing angle from the aspect ratio: the twist shape is α minus its mean.
+        let s2a = ll
+            .inverse_chord_at_aspect_ratio(&a.add_scalar(-a.mean()), &d.gamma_hat)
+            .unwrap();
+        assert!(rel(&s2a.chord_over_b, &c) < 1e-9, "SPI #2 at AR: chord");
+        assert!(rel(&s2a.alpha_rad, &a) < 1e-9, "SPI #2 at AR: wing angle");
         // Second condition: the same wing 4° higher.
         let da = 4f64.to_radians();
         let d2 = ll.direct(&c, &a.add_scalar(da)).unwrap();

@@ -4,14 +4,16 @@
 use std::path::{Path, PathBuf};
 
 use cell_airfoil::{Airfoil, AirfoilError, SurfaceFunctions};
-use cell_config::{Allowed, ParseError, Place, Problem};
-use nalgebra::DVector;
+use cell_config::{Allowed, OutOfRange, ParseError, Place, Problem};
 use nalgebra::Point2;
 use serde::Deserialize;
 
+pub use crate::design::{ChordShape, Design};
+use crate::design::{DesignError, DesignReport, Designed};
 use crate::layers::{section_layers, BuildParams, Layer, Planform};
 use crate::llt::{LiftingLine, LltError, Solution};
 use crate::section::{split, Section, SectionError};
+use crate::spacing::SpacingRule;
 use crate::structure::{bending_moment_n_mm, place_spars, SparLayout, StructureParams};
 
 /// What went wrong loading a spec or designing the wing.
@@ -45,6 +47,15 @@ pub enum SpecError {
     /// The lifting-line design.
     #[error(transparent)]
     Llt(#[from] LltError),
+    /// A design-case field (`aero.design.…`, [`crate::design`]) is invalid; `file` is empty
+    /// when the error comes from [`Wing::design`], whose callers name the file.
+    #[error("{}{error}", if file.is_empty() { String::new() } else { format!("{file}: ") })]
+    Design {
+        /// Spec file, or empty.
+        file: String,
+        /// The field, from `aero.design`, and its problem.
+        error: cell_config::FieldError,
+    },
     /// The section split.
     #[error(transparent)]
     Section(#[from] SectionError),
@@ -85,45 +96,8 @@ pub struct AeroSpec {
     /// Airfoil zero-lift angle α_L0 \[deg\]; added to the LLT α for the built twist. Default 0.
     #[serde(default)]
     pub alpha_l0_deg: f64,
-    /// The design case.
+    /// The design case ([`crate::design`]).
     pub design: Design,
-}
-
-/// A chord distribution shape (scaled to the aspect ratio).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "snake_case")]
-pub enum ChordShape {
-    /// The discrete ellipse Q⁻¹e.
-    Elliptic,
-    /// Constant chord.
-    Rectangular,
-    /// Straight taper, tip/root chord ratio in (0, 1\].
-    Tapered {
-        /// c_tip / c_root.
-        taper_ratio: f64,
-    },
-}
-
-/// The design case of Table 1 the spec uses (the others are in [`crate::llt`]).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, tag = "case", rename_all = "snake_case")]
-pub enum Design {
-    /// Single-point inverse #1: a chord shape and an elliptic lift at `c_l` → twist.
-    InverseTwist {
-        /// Chord shape.
-        chord: ChordShape,
-        /// Design wing lift coefficient c_L.
-        c_l: f64,
-    },
-    /// Direct design: a chord shape and linear washout → lift.
-    Direct {
-        /// Chord shape.
-        chord: ChordShape,
-        /// Root angle from the zero-lift line \[deg\].
-        root_alpha_deg: f64,
-        /// Root minus tip angle \[deg\].
-        washout_deg: f64,
-    },
 }
 
 /// Flight loads.
@@ -137,7 +111,8 @@ pub struct LoadSpec {
     pub load_factor: f64,
 }
 
-/// Structure (Algorithm 1; defaults: PLA, FS 20, Table 2's 30 mm spacing).
+/// Structure (Algorithm 1; defaults: PLA, FS 20, the G-Wing example's AM spacing rule, whose
+/// floor r*·w_e is Table 2's 30 mm at w_e = 0.5 mm).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StructureSpec {
@@ -145,8 +120,14 @@ pub struct StructureSpec {
     pub yield_strength_mpa: f64,
     /// Factor of safety. Default 20 (notes).
     pub safety_factor: f64,
-    /// Max spar spacing \[mm\]. Default 30 (Table 2).
-    pub max_spar_spacing_mm: f64,
+    /// η* of the AM spar spacing rule Δx_max = max(min(κ_US, κ_LS)·w_e²/η*, r*·w_e)
+    /// ([`crate::spacing`], Alg. 1 step 5, ref. \[8\]). Default 2e-5 (the G-Wing example).
+    pub am_eta_star: f64,
+    /// r* of the same rule: the floor r*·w_e. Default 60 (30 mm at w_e = 0.5 mm, Table 2).
+    pub am_r_star: f64,
+    /// Optional hard cap on every spar gap \[mm\], applied over the rule (none by default: the
+    /// rule alone; set it to hold a spacing no curvature may widen).
+    pub max_spar_spacing_mm: Option<f64>,
     /// Hinge line chord fraction. Default 0.8 (Fig. 5).
     pub hinge_x_over_c: f64,
     /// Hinge height in local thickness above the lower surface. Default 1 (upper surface).
@@ -158,7 +139,9 @@ impl Default for StructureSpec {
         Self {
             yield_strength_mpa: 26.0,
             safety_factor: 20.0,
-            max_spar_spacing_mm: 30.0,
+            am_eta_star: 2e-5,
+            am_r_star: 60.0,
+            max_spar_spacing_mm: None,
             hinge_x_over_c: 0.8,
             hinge_z_over_t: 1.0,
         }
@@ -235,6 +218,29 @@ impl Default for BuildSpec {
     }
 }
 
+/// Most lifting-line stations (issue 23: the solve builds two n × n matrices, 8n² bytes each,
+/// and factors them in O(n³); 200 000 stations would take 640 GB). 5× the paper's 400: 32 MB
+/// matrices and a factorisation of a few seconds.
+pub const MAX_STATIONS: usize = 2_000;
+
+/// Most printable sections, `2·⌈(span − centre)/2 / z_max⌉ + 1` (issue 23). A 1.5 m span in
+/// 150 mm sections is 11; the limit is ~20× that.
+pub const MAX_SECTIONS: usize = 201;
+
+/// Most layers in one section, `z_max / layer_height` (issue 23: a 1e-9 mm layer height). The
+/// defaults give 750 (150 mm at 0.2 mm); the limit is 10× a 150 mm section at 0.1 mm.
+pub const MAX_LAYERS_PER_SECTION: usize = 15_000;
+
+/// Most layers over the whole wing, `span / layer_height` (issue 23). A 1.5 m wing at 0.2 mm
+/// is 7 500; the limit is ~13× that.
+pub const MAX_WING_LAYERS: usize = 100_000;
+
+/// Most spar gaps or rib lines across one chord: `c_max / max_spar_spacing` and
+/// `c_max / extrusion_width`, with `c_max = 2·span/AR` bounding every chord the planform can
+/// have (a taper's root chord is `2/(1 + λ)` times the mean `span/AR`, an ellipse's 4/π)
+/// (issue 23). Table 2's wing has ~5 spars and ~300 rib lines per chord.
+pub const MAX_LINES_PER_CHORD: usize = 5_000;
+
 fn default_stations() -> usize {
     400
 }
@@ -289,11 +295,8 @@ impl WingSpec {
                 "MPa",
             ),
             ("structure.safety_factor", self.structure.safety_factor, ""),
-            (
-                "structure.max_spar_spacing_mm",
-                self.structure.max_spar_spacing_mm,
-                "mm",
-            ),
+            ("structure.am_eta_star", self.structure.am_eta_star, ""),
+            ("structure.am_r_star", self.structure.am_r_star, ""),
             ("build.layer_height_mm", b.layer_height_mm, "mm"),
             ("build.first_layer_height_mm", b.first_layer_height_mm, "mm"),
             ("build.extrusion_width_mm", b.extrusion_width_mm, "mm"),
@@ -336,7 +339,98 @@ impl WingSpec {
             self.aero.alpha_l0_deg,
             Allowed::FINITE,
             "deg",
-        )
+        )?;
+        check(
+            "aero.aspect_ratio",
+            self.aero.aspect_ratio,
+            Allowed::POSITIVE,
+            "",
+        )?;
+        self.aero.design.validate().map_err(|e| SpecError::Design {
+            file: file.into(),
+            error: e.within("aero.design"),
+        })?;
+        self.check_sizes(file)
+    }
+
+    /// The limits on what the spec makes (issue 23): stations, sections, layers, spars and
+    /// rib lines ([`MAX_STATIONS`] and the others); each error names the field and the limit.
+    fn check_sizes(&self, file: &str) -> Result<(), SpecError> {
+        let fail = |field: &'static str, e: OutOfRange| SpecError::Invalid {
+            file: file.into(),
+            field,
+            reason: e.into(),
+        };
+        let (a, b) = (&self.aero, &self.build);
+        Allowed::closed(2.0, MAX_STATIONS as f64)
+            .whole()
+            .check(a.stations as f64, "")
+            .map_err(|e| fail("aero.stations", e.because("MAX_STATIONS")))?;
+        // Counts from a ratio of two fields: the smaller one has a least value.
+        let at_least = |field, value: f64, total: f64, most: usize, why: String| {
+            Allowed::at_least(total / most as f64)
+                .check(value, "mm")
+                .map_err(|e| fail(field, e.because(why)))
+        };
+        let semi = 0.5 * (a.span_mm - b.centre_width_mm);
+        let sides = (MAX_SECTIONS - 1) / 2;
+        at_least(
+            "build.z_max_mm",
+            b.z_max_mm,
+            semi,
+            sides,
+            format!(
+                "at most {MAX_SECTIONS} sections (MAX_SECTIONS): {sides} per side over \
+                 (aero.span_mm − build.centre_width_mm)/2 = {semi} mm"
+            ),
+        )?;
+        at_least(
+            "build.layer_height_mm",
+            b.layer_height_mm,
+            b.z_max_mm,
+            MAX_LAYERS_PER_SECTION,
+            format!(
+                "at most {MAX_LAYERS_PER_SECTION} layers per section \
+                 (MAX_LAYERS_PER_SECTION) over build.z_max_mm = {} mm",
+                b.z_max_mm
+            ),
+        )?;
+        at_least(
+            "build.layer_height_mm",
+            b.layer_height_mm,
+            a.span_mm,
+            MAX_WING_LAYERS,
+            format!(
+                "at most {MAX_WING_LAYERS} layers (MAX_WING_LAYERS) over aero.span_mm = {} mm",
+                a.span_mm
+            ),
+        )?;
+        let c_max = 2.0 * a.span_mm / a.aspect_ratio;
+        let lines = || {
+            format!(
+                "at most {MAX_LINES_PER_CHORD} lines (MAX_LINES_PER_CHORD) across the \
+                 largest chord, 2·aero.span_mm/aero.aspect_ratio = {c_max} mm"
+            )
+        };
+        // The least spar gap is the rule's floor r*·w_e, or the cap if lower.
+        let caps = self
+            .structure
+            .max_spar_spacing_mm
+            .map(|cap| ("structure.max_spar_spacing_mm", cap, c_max));
+        for (field, value, total) in [
+            (
+                "structure.am_r_star",
+                self.structure.am_r_star,
+                c_max / b.extrusion_width_mm,
+            ),
+            ("build.extrusion_width_mm", b.extrusion_width_mm, c_max),
+        ]
+        .into_iter()
+        .chain(caps)
+        {
+            at_least(field, value, total, MAX_LINES_PER_CHORD, lines())?;
+        }
+        Ok(())
     }
 
     /// The [`BuildParams`] of this spec.
@@ -373,8 +467,13 @@ pub struct Wing {
     pub airfoil: Airfoil,
     /// Its surface functions.
     pub surfaces: SurfaceFunctions,
-    /// The lifting-line result (non-dimensional).
+    /// The lifting-line result (non-dimensional): condition 1 of the design (the only one in
+    /// single-point cases), whose α is the built twist.
     pub aero: Solution,
+    /// The design case's solve: every condition, targets and Δα.
+    pub design: Designed,
+    /// The condition (0-based index into `design.conditions`) whose lift loads the spars.
+    pub structure_condition: usize,
     /// Chord and built twist per station.
     pub planform: Planform,
     /// Lift per span at the design load \[N/mm\].
@@ -393,30 +492,15 @@ impl Wing {
         let a = &spec.aero;
         let ll = LiftingLine::new(a.stations, a.aspect_ratio, a.lift_slope_per_rad)?;
         let y = ll.stations();
-        let shape = |c: ChordShape| -> Result<DVector<f64>, LltError> {
-            let raw = match c {
-                ChordShape::Elliptic => ll.elliptic_shape(),
-                ChordShape::Rectangular => DVector::repeat(ll.n(), 1.0),
-                ChordShape::Tapered { taper_ratio } => {
-                    y.map(|y| 1.0 - 2.0 * y.abs() * (1.0 - taper_ratio))
-                }
-            };
-            ll.chord_from_shape(&raw)
-        };
-        let aero = match &a.design {
-            Design::InverseTwist { chord, c_l } => {
-                let gamma = ll.gamma_from_shape(&ll.elliptic_shape(), *c_l)?;
-                ll.inverse_twist(&shape(*chord)?, &gamma)?
-            }
-            Design::Direct {
-                chord,
-                root_alpha_deg,
-                washout_deg,
-            } => {
-                let alpha = y.map(|y| (root_alpha_deg - washout_deg * 2.0 * y.abs()).to_radians());
-                ll.direct(&shape(*chord)?, &alpha)?
-            }
-        };
+        let design = a.design.solve(&ll).map_err(|e| match e {
+            DesignError::Field(error) => SpecError::Design {
+                file: String::new(),
+                error: error.within("aero.design"),
+            },
+            DesignError::Llt(e) => SpecError::Llt(e),
+        })?;
+        let aero = design.conditions[0].clone();
+        let structure_condition = design.structure_condition(&y);
         let b = a.span_mm;
         let planform = Planform {
             span_mm: b,
@@ -428,7 +512,11 @@ impl Wing {
                 .collect(),
         };
         let lift = spec.loads.gross_weight_n * spec.loads.load_factor;
-        let lift_n_mm: Vec<f64> = aero.lift_per_span_n_m(lift, b).iter().copied().collect();
+        let lift_n_mm: Vec<f64> = design.conditions[structure_condition]
+            .lift_per_span_n_m(lift, b)
+            .iter()
+            .copied()
+            .collect();
         let moment = bending_moment_n_mm(&lift_n_mm, b);
         let bp = spec.build_params();
         let sp = StructureParams {
@@ -436,7 +524,12 @@ impl Wing {
             yield_strength_mpa: spec.structure.yield_strength_mpa,
             safety_factor: spec.structure.safety_factor,
             hinge_x_over_c: spec.structure.hinge_x_over_c,
-            max_spar_spacing_mm: spec.structure.max_spar_spacing_mm,
+            spacing: SpacingRule {
+                extrusion_width_mm: bp.extrusion_width_mm,
+                eta_star: spec.structure.am_eta_star,
+                r_star: spec.structure.am_r_star,
+                max_mm: spec.structure.max_spar_spacing_mm,
+            },
             min_spar_height_mm: (2.0 * bp.spar_overlap + 1.0) * bp.extrusion_width_mm,
         };
         let yb: Vec<f64> = y.iter().copied().collect();
@@ -447,11 +540,20 @@ impl Wing {
             airfoil,
             surfaces,
             aero,
+            design,
+            structure_condition,
             planform,
             lift_n_mm,
             spars,
             sections,
         })
+    }
+
+    /// The design case's report: the solved planform and each condition, requested against
+    /// achieved.
+    pub fn design_report(&self) -> DesignReport {
+        self.design
+            .report(self.spec.aero.span_mm, self.structure_condition)
     }
 
     /// The layers of section `i` (index into [`Wing::sections`]), or None if out of range.
@@ -466,5 +568,101 @@ impl Wing {
             section,
             &self.spec.build_params(),
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped Table 2 spec with `edits` (`(key line prefix, replacement line)`) applied.
+    fn table2(edits: &[(&str, &str)]) -> String {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../config/wings/gwing-table2.yaml"
+        );
+        let mut text = std::fs::read_to_string(path).unwrap();
+        for (key, line) in edits {
+            let old = text
+                .lines()
+                .find(|l| l.trim_start().starts_with(key))
+                .unwrap_or_else(|| panic!("{key} in the spec"))
+                .to_owned();
+            text = text.replace(&old, line);
+        }
+        text
+    }
+
+    fn error(edits: &[(&str, &str)]) -> Option<String> {
+        WingSpec::from_yaml_str(&table2(edits), "w.yaml")
+            .err()
+            .map(|e| e.to_string())
+    }
+
+    #[test]
+    fn stations_at_the_limit_pass_and_one_more_is_refused() {
+        assert_eq!(error(&[("stations:", "  stations: 2000")]), None);
+        let e = error(&[("stations:", "  stations: 2001")]).unwrap();
+        assert_eq!(
+            e,
+            "w.yaml: field `aero.stations`: 2001 is out of range: must be in [2, 2000] \
+             (MAX_STATIONS)"
+        );
+        assert!(error(&[("stations:", "  stations: 200000")]).is_some());
+    }
+
+    #[test]
+    fn layer_height_section_and_chord_counts_are_capped() {
+        // Per section: 300 mm sections over at most 15000 layers: 0.02 mm.
+        let z = ("z_max_mm:", "  z_max_mm: 300");
+        let h = |h: f64| format!("  layer_height_mm: {h}");
+        let least = 300.0 / MAX_LAYERS_PER_SECTION as f64;
+        assert_eq!(error(&[z, ("layer_height_mm:", h(least).as_str())]), None);
+        let e = error(&[z, ("layer_height_mm:", h(0.0199).as_str())]).unwrap();
+        assert!(
+            e.starts_with("w.yaml: field `build.layer_height_mm`: 0.0199 mm is out of range")
+                && e.ends_with(
+                    "(at most 15000 layers per section (MAX_LAYERS_PER_SECTION) over \
+                     build.z_max_mm = 300 mm)"
+                ),
+            "{e}"
+        );
+        // Over the wing: 1090 mm in at most 100000 layers.
+        let least = 1090.0 / MAX_WING_LAYERS as f64;
+        assert_eq!(error(&[("layer_height_mm:", h(least).as_str())]), None);
+        let e = error(&[("layer_height_mm:", h(0.0108).as_str())]).unwrap();
+        assert!(
+            e.ends_with("(MAX_WING_LAYERS) over aero.span_mm = 1090 mm)"),
+            "{e}"
+        );
+        let e = error(&[("layer_height_mm:", "  layer_height_mm: 1e-9")]).unwrap();
+        assert!(e.contains("`build.layer_height_mm`: 0.000000001 mm"), "{e}");
+        // Sections: (1090 − 50)/2 = 520 mm per side in at most 100 sections.
+        let z = |z: f64| format!("  z_max_mm: {z}");
+        assert_eq!(error(&[("z_max_mm:", z(5.2).as_str())]), None);
+        let e = error(&[("z_max_mm:", z(5.19).as_str())]).unwrap();
+        assert!(
+            e.contains("`build.z_max_mm`: 5.19 mm is out of range: must be finite and ≥ 5.2")
+                && e.contains("MAX_SECTIONS"),
+            "{e}"
+        );
+        // Spar spacing: the largest chord is 2·1090/8 = 272.5 mm, over 5000 lines: the rule's
+        // floor r*·w_e (w_e = 0.5 mm) and the optional cap at least 0.0545 mm.
+        let r_star = |r: f64| format!("  am_r_star: {r}");
+        assert_eq!(error(&[("am_r_star:", r_star(0.109).as_str())]), None);
+        let e = error(&[("am_r_star:", r_star(0.1089).as_str())]).unwrap();
+        assert!(
+            e.contains("`structure.am_r_star`") && e.contains("MAX_LINES_PER_CHORD"),
+            "{e}"
+        );
+        let cap = |s: f64| format!("  am_r_star: 60\n  max_spar_spacing_mm: {s}");
+        assert_eq!(error(&[("am_r_star:", cap(0.0545).as_str())]), None);
+        let e = error(&[("am_r_star:", cap(0.0544).as_str())]).unwrap();
+        assert!(
+            e.contains("`structure.max_spar_spacing_mm`") && e.contains("MAX_LINES_PER_CHORD"),
+            "{e}"
+        );
+        let e = error(&[("am_r_star:", cap(0.0).as_str())]).unwrap();
+        assert!(e.contains("`structure.max_spar_spacing_mm`"), "{e}");
     }
 }

@@ -1,7 +1,10 @@
 //! Spar locations X_sp (seed 002 Algorithm 1): a main spar at x_τmax, fore/aft spars for the
-//! bending inertia the flight loads need, then the spacing capped by the AM skin-support limit.
+//! bending inertia the flight loads need, then the spacing capped by the AM skin-support rule
+//! ([`crate::spacing`]).
 
 use cell_airfoil::SurfaceFunctions;
+
+use crate::spacing::{SkinCurvature, SpacingRule};
 
 /// Structural inputs (seed 002 Alg. 1 "machine settings" and the notes' structural formulas).
 #[derive(Debug, Clone, PartialEq)]
@@ -15,8 +18,8 @@ pub struct StructureParams {
     /// Hinge chord fraction: only spars ahead of it carry bending (notes, "Only spars ahead of
     /// the hinge count").
     pub hinge_x_over_c: f64,
-    /// AM skin-support limit on spar spacing \[mm\] (Table 2: 30 mm).
-    pub max_spar_spacing_mm: f64,
+    /// AM skin-support limit on spar spacing (step 5; r*·w_e = 30 mm is Table 2's spacing).
+    pub spacing: SpacingRule,
     /// Spars are placed only where the section is at least this thick \[mm\] (room for a
     /// line between the skins).
     pub min_spar_height_mm: f64,
@@ -141,8 +144,8 @@ pub fn spars_for(m: f64, x_tau: f64) -> Vec<f64> {
 /// Per station: I_req = τ_max·c·M/(2σ) with σ = σ_y/FS (steps 2–3); m by 20 bisection steps
 /// on \[0, 20\] for the smallest m whose spars and skin reach I_req (step 4; m = 20 if even that
 /// falls short, visible in `provided_inertia_mm4`); then, walking outward from the main spar,
-/// spars are inserted so no gap exceeds `max_spar_spacing_mm` (step 5), as far as the section
-/// is `min_spar_height_mm` thick.
+/// spars are inserted so no gap exceeds the AM rule's Δx_max at the spar it starts from
+/// (step 5, [`crate::spacing`]), as far as the section is `min_spar_height_mm` thick.
 pub fn place_spars(
     surf: &SurfaceFunctions,
     y_over_b: &[f64],
@@ -153,6 +156,7 @@ pub fn place_spars(
     let x_tau = surf.x_max_thickness();
     let sigma = p.yield_strength_mpa / p.safety_factor;
     let i_hat = skin_inertia_unit(surf);
+    let curvature = SkinCurvature::new(surf);
     let mut out = SparLayout {
         y_over_b: y_over_b.to_vec(),
         x_over_c: Vec::new(),
@@ -181,20 +185,24 @@ pub fn place_spars(
         out.provided_inertia_mm4.push(inertia(m));
         out.required_inertia_mm4.push(i_req);
         out.m.push(m);
-        out.x_over_c.push(cap_spacing(surf, &load, x_tau, c, p));
+        out.x_over_c
+            .push(cap_spacing(surf, &curvature, &load, x_tau, c, p));
     }
     out
 }
 
-/// Step 5: insert spars outward from the main spar so no gap exceeds the AM limit.
+/// Step 5: insert spars outward from the main spar so no gap exceeds the AM rule, each gap's
+/// limit taken at the spar it starts from (the skin curvature there). Load spars keep their
+/// places (the reference code moves them inward instead; inserting keeps I ≥ I_req).
 fn cap_spacing(
     surf: &SurfaceFunctions,
+    curvature: &SkinCurvature,
     load: &[f64],
     x_tau: f64,
     chord_mm: f64,
     p: &StructureParams,
 ) -> Vec<f64> {
-    let cap = p.max_spar_spacing_mm / chord_mm;
+    let cap = |x: f64| curvature.max_gap_mm(&p.spacing, x, chord_mm) / chord_mm;
     let fits = |x: f64| surf.thickness(x) * chord_mm >= p.min_spar_height_mm;
     let mut xs = vec![x_tau];
     for dir in [-1.0, 1.0] {
@@ -208,8 +216,8 @@ fn cap_spacing(
         // The section end (LE or TE) closes the last gap.
         let end = if dir < 0.0 { 0.0 } else { 1.0 };
         for x in ahead.into_iter().chain(std::iter::once(end)) {
-            while (x - prev) * dir > cap * (1.0 + 1e-9) {
-                prev += dir * cap;
+            while (x - prev) * dir > cap(prev) * (1.0 + 1e-9) {
+                prev += dir * cap(prev);
                 if fits(prev) {
                     xs.push(prev);
                 }
@@ -238,15 +246,70 @@ mod tests {
         SurfaceFunctions::new(&Airfoil::load(path).unwrap()).unwrap()
     }
 
+    /// The G-Wing example's rule (η* = 2e-5, r* = 60 at w_e = 0.5 mm) under a hard cap.
     fn params(cap: f64) -> StructureParams {
         StructureParams {
             extrusion_width_mm: 0.5,
             yield_strength_mpa: 26.0,
             safety_factor: 20.0,
             hinge_x_over_c: 0.8,
-            max_spar_spacing_mm: cap,
+            spacing: SpacingRule {
+                extrusion_width_mm: 0.5,
+                eta_star: 2e-5,
+                r_star: 60.0,
+                max_mm: Some(cap),
+            },
             min_spar_height_mm: 1.1,
         }
+    }
+
+    /// Every gap between neighbouring spars, walking outward from the main spar, against the
+    /// rule at the gap's inner spar: (gap, limit) in mm.
+    pub(crate) fn gaps_and_limits(
+        surf: &SurfaceFunctions,
+        xs: &[f64],
+        chord_mm: f64,
+        rule: &SpacingRule,
+    ) -> Vec<(f64, f64)> {
+        let curvature = SkinCurvature::new(surf);
+        let main = xs
+            .iter()
+            .position(|x| *x == surf.x_max_thickness())
+            .expect("main spar at x_τmax");
+        let limit = |x: f64| curvature.max_gap_mm(rule, x, chord_mm);
+        let aft = xs[main..].windows(2).map(|w| (w[1] - w[0], limit(w[0])));
+        let fore = xs[..=main].windows(2).map(|w| (w[1] - w[0], limit(w[1])));
+        aft.chain(fore).map(|(g, l)| (g * chord_mm, l)).collect()
+    }
+
+    #[test]
+    fn spacing_follows_the_am_rule_and_widens_where_the_skin_curves() {
+        let s = ag24();
+        let rule = params(f64::INFINITY).spacing;
+        let p = StructureParams {
+            spacing: SpacingRule {
+                max_mm: None,
+                ..rule
+            },
+            ..params(0.0)
+        };
+        for chord in [60.0, 120.0, 175.0, 272.5] {
+            let layout = place_spars(&s, &[0.0], &[chord], &[0.0], &p);
+            let gaps = gaps_and_limits(&s, &layout.x_over_c[0], chord, &p.spacing);
+            for (gap, limit) in &gaps {
+                assert!(
+                    gap <= &(limit + 1e-6),
+                    "c = {chord}: gap {gap} > Δx_max {limit}"
+                );
+                assert!(*limit >= 30.0 - 1e-9, "r*·w_e = 30 mm is a floor");
+            }
+        }
+        // A small chord's skins curve more per mm (κ/c): the LE needs no spar 30 mm ahead of
+        // the main spar, and the section gets fewer spars than a constant 30 mm would give.
+        let c = 60.0;
+        let rule_spars = place_spars(&s, &[0.0], &[c], &[0.0], &p).x_over_c[0].len();
+        let flat_spars = place_spars(&s, &[0.0], &[c], &[0.0], &params(30.0)).x_over_c[0].len();
+        assert!(rule_spars < flat_spars, "{rule_spars} vs {flat_spars}");
     }
 
     #[test]

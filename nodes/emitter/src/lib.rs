@@ -19,13 +19,16 @@
 //! as a text entry on `/emitter/log`.
 //!
 //! The `machine_profile` parameter is read (and, for a path, the file loaded) at start-up; a
-//! profile named in a request is resolved for that request.
+//! profile named in a request is resolved for that request, a path only to a regular file
+//! under `data_dirs` within `max_file_mib` ([`cell_runtime::data_files`]), and the answer
+//! never quotes the file.
 
 use std::{path::PathBuf, sync::Arc};
 
 use anyhow::{bail, Context as _};
 use cell_msgs::{EmitProgramRequest, EmitProgramResponse, MachineProgram, Toolpath};
 use cell_profiles::MachineProfile;
+use cell_runtime::data_files::{self, DataDirs};
 use cell_runtime::{CellNode, NodeParamError, Publisher, QosPreset};
 use serde::{Deserialize, Serialize};
 
@@ -50,6 +53,11 @@ pub struct EmitterParams {
     /// Directory to write each published program's files to (created if missing); empty: do
     /// not write files.
     pub output_dir: String,
+    /// Directories a profile path in a request must lie in (relative: to the working
+    /// directory); see `cell_runtime::data_files`.
+    pub data_dirs: Vec<String>,
+    /// Largest profile file a request may name, MiB.
+    pub max_file_mib: u64,
 }
 
 impl Default for EmitterParams {
@@ -59,6 +67,8 @@ impl Default for EmitterParams {
             input_topic: "toolpath".into(),
             output_topic: "machine_program".into(),
             output_dir: String::new(),
+            data_dirs: data_files::default_data_dirs(),
+            max_file_mib: data_files::DEFAULT_MAX_FILE_MIB,
         }
     }
 }
@@ -76,6 +86,7 @@ struct Emitter {
     node: CellNode,
     profile_name: String,
     profile: Arc<MachineProfile>,
+    data_dirs: Arc<DataDirs>,
     output_dir: Option<PathBuf>,
     programs: Publisher<MachineProgram>,
     handled: u64,
@@ -93,11 +104,14 @@ impl Emitter {
         let default =
             (profile.is_empty() || profile == self.profile_name).then(|| self.profile.clone());
         let now = self.node.now();
+        let data_dirs = self.data_dirs.clone();
         tokio::task::spawn_blocking(move || {
             let profile = match default {
                 Some(p) => p,
                 None => Arc::new(
-                    MachineProfile::resolve(&profile).map_err(|e| format!("job {job_id}: {e}"))?,
+                    data_dirs
+                        .machine_profile("machine_profile", &profile)
+                        .map_err(|e| format!("job {job_id}: {e}"))?,
                 ),
             };
             let mut program = cell_emitter::emit_program(&toolpath, &profile, &job_id)
@@ -233,6 +247,7 @@ pub async fn run(node: CellNode, p: EmitterParams) -> anyhow::Result<()> {
         node: node.clone(),
         profile_name: p.machine_profile.clone(),
         profile: Arc::new(profile),
+        data_dirs: Arc::new(DataDirs::from_params(&p.data_dirs, p.max_file_mib)),
         output_dir,
         programs,
         handled: 0,

@@ -10,7 +10,11 @@
 //!    `tests/data/stl/`, written to the temp directory for the slicer to read, or an STL path),
 //!    the RAPID program an emitter makes of its toolpath, and `execute_program` on the robot
 //!    controller `waam_machine_id`.
-//! 6. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
+//! 6. If `wing_job_id` is set, a G-Wing job (seed 002): a wing `slice` goal (on `wing_action`)
+//!    for one section of the wing spec (embedded from `config/wings/` with its airfoil, written
+//!    to `part_dir`, or a spec path), the Marlin program an emitter makes of its toolpath, and
+//!    `execute_program` on the printer `wing_machine_id` (the Marlin simulator in the demo).
+//! 7. Prints a summary table (stdout) and exits 0 if every stage succeeded, else 1 naming the
 //!    stage and why.
 //!
 //! `cell demo` runs it with a reduced iteration count and stops the other nodes once it exits.
@@ -43,6 +47,15 @@ pub const EMBEDDED_SHEETS: &[(&str, &str)] = &[(
 pub const EMBEDDED_PARTS: &[(&str, &[u8])] = &[(
     "20mm-xyz-cube",
     include_bytes!("../../../tests/data/stl/20mm-xyz-cube.stl"),
+)];
+
+/// Wing specs shipped in `config/wings/`, embedded with their airfoil so the demo runs from any
+/// directory: (name, spec YAML, airfoil file name, airfoil `.dat`).
+pub const EMBEDDED_WINGS: &[(&str, &str, &str, &str)] = &[(
+    "gwing-table2",
+    include_str!("../../../config/wings/gwing-table2.yaml"),
+    "ag24.dat",
+    include_str!("../../../config/airfoils/ag24.dat"),
 )];
 
 /// Parameters (ROS 2 YAML under `ros__parameters:` or `-p key:=value`).
@@ -95,6 +108,19 @@ pub struct RunnerParams {
     pub waam_layer_height_mm: f64,
     /// Robot controller for the WAAM program.
     pub waam_machine_id: String,
+    /// Directory the embedded WAAM part is written to for the slicer (created if missing; it
+    /// must be one of the slicer's `data_dirs`); empty: the system's temporary directory.
+    pub part_dir: String,
+    /// Job id of the G-Wing job; empty: no wing job.
+    pub wing_job_id: String,
+    /// Wing spec: a name in [`EMBEDDED_WINGS`] or a spec path (read by the slicer).
+    pub wing_spec: String,
+    /// The section to print (index into the design's sections; 0: the centre section).
+    pub wing_section: u32,
+    /// The slicer's action for the wing goal (the demo runs a second slicer on `wing_slice`).
+    pub wing_action: String,
+    /// The printer (config/controllers) the Marlin program runs on.
+    pub wing_machine_id: String,
 }
 
 impl Default for RunnerParams {
@@ -123,6 +149,12 @@ impl Default for RunnerParams {
             waam_part: "20mm-xyz-cube".into(),
             waam_layer_height_mm: 0.0,
             waam_machine_id: "abb-irb2600-waam-sim".into(),
+            part_dir: String::new(),
+            wing_job_id: String::new(),
+            wing_spec: "gwing-table2".into(),
+            wing_section: 0,
+            wing_action: "slice".into(),
+            wing_machine_id: "marlin-sim".into(),
         }
     }
 }
@@ -146,6 +178,23 @@ pub struct JobSummary {
     pub sheet: Option<SheetSummary>,
     /// The WAAM job, if one was run.
     pub waam: Option<WaamSummary>,
+    /// The G-Wing job, if one was run.
+    pub wing: Option<WingSummary>,
+}
+
+/// What the G-Wing job's stages gave, for the summary.
+#[derive(Debug, Clone, Default)]
+pub struct WingSummary {
+    /// The slicer's result (its `report_json` is `cell_slicer::wing::WingReport`).
+    pub slice: SliceResult,
+    /// Design and slicing time.
+    pub slice_time: Duration,
+    /// The program.
+    pub program: MachineProgram,
+    /// The run's result.
+    pub run: ExecuteProgramResult,
+    /// Running time.
+    pub run_time: Duration,
 }
 
 /// What the WAAM job's stages gave, for the summary.
@@ -275,6 +324,38 @@ impl std::fmt::Display for JobSummary {
                 w.run_time.as_secs_f64()
             )?;
         }
+        if let Some(g) = &self.wing {
+            let report: serde_json::Value =
+                serde_json::from_str(&g.slice.report_json).unwrap_or_default();
+            let s = &report["section"];
+            let figure = |k: &str| s[k].as_f64().unwrap_or(f64::NAN);
+            let printed = s["layers"].as_u64().unwrap_or(0);
+            let whole = report["layers_in_section"].as_u64().unwrap_or(printed);
+            let layers = if printed < whole {
+                format!("the first {printed} of {whole} layers (a short demo print)")
+            } else {
+                format!("{printed} layers")
+            };
+            write!(
+                f,
+                "\n| gwing   | section {} ({} {}): {layers}, {:.2} g, build time {:.1} min ({:.1} \
+                 min with Marlin's planner), designed and sliced in {:.1} s |",
+                s["index"].as_u64().unwrap_or(0),
+                s["side"].as_str().unwrap_or("?"),
+                s["position"].as_u64().unwrap_or(0),
+                figure("mass_g"),
+                figure("build_time_s") / 60.0,
+                figure("build_time_with_acceleration_s") / 60.0,
+                g.slice_time.as_secs_f64()
+            )?;
+            write!(f, "\n| gwing program | {} |", program_cell(&g.program))?;
+            write!(
+                f,
+                "\n| gwing machine | {}; {} |",
+                run_cell(&g.run, &g.program, g.run_time),
+                g.run.message
+            )?;
+        }
         Ok(())
     }
 }
@@ -391,6 +472,11 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     } else {
         Some(run_waam(node, p, &mut programs, &run_client, timeout).await?)
     };
+    let wing = if p.wing_job_id.is_empty() {
+        None
+    } else {
+        Some(run_wing(node, p, &mut programs, &run_client, timeout).await?)
+    };
     Ok(JobSummary {
         iterations: last_iteration.load(std::sync::atomic::Ordering::Relaxed),
         plan,
@@ -400,6 +486,7 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
         run_time,
         sheet,
         waam,
+        wing,
     })
 }
 
@@ -540,7 +627,15 @@ async fn run_waam(
     // removed once the slicer has answered.
     let (stl_file, written) = match EMBEDDED_PARTS.iter().find(|(name, _)| *name == p.waam_part) {
         Some((name, bytes)) => {
-            let path = std::env::temp_dir().join(format!(
+            let dir = if p.part_dir.is_empty() {
+                std::env::temp_dir()
+            } else {
+                std::path::PathBuf::from(&p.part_dir)
+            };
+            std::fs::create_dir_all(&dir).with_context(|| format!("part_dir {}", dir.display()))?;
+            // An absolute path: the slicer's working directory may differ.
+            let dir = std::fs::canonicalize(&dir).unwrap_or(dir);
+            let path = dir.join(format!(
                 "cellsuite-{}-{}-{name}.stl",
                 p.waam_job_id,
                 std::process::id()
@@ -584,6 +679,110 @@ async fn run_waam(
     })
 }
 
+/// Writes an embedded wing spec and its airfoil into `dir` (the airfoil next to the spec, as
+/// the spec names it); returns the spec's path, or `None` for a name that is not embedded.
+fn write_embedded_wing(
+    p: &RunnerParams,
+    dir: &std::path::Path,
+) -> anyhow::Result<Option<std::path::PathBuf>> {
+    let Some((name, spec, airfoil_name, airfoil)) =
+        EMBEDDED_WINGS.iter().find(|(n, ..)| *n == p.wing_spec)
+    else {
+        return Ok(None);
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("part_dir {}", dir.display()))?;
+    let dir = std::fs::canonicalize(dir).unwrap_or(dir.to_path_buf());
+    let prefix = format!("cellsuite-{}-{}", p.wing_job_id, std::process::id());
+    let airfoil_file = format!("{prefix}-{airfoil_name}");
+    // The spec's airfoil path is relative to the spec file: point it at the copy beside it.
+    let text: String = spec
+        .lines()
+        .map(|l| {
+            if l.starts_with("airfoil:") {
+                format!("airfoil: {airfoil_file}\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    std::fs::write(dir.join(&airfoil_file), airfoil)
+        .with_context(|| format!("writing {airfoil_file} to {}", dir.display()))?;
+    let path = dir.join(format!("{prefix}-{name}.yaml"));
+    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    Ok(Some(path))
+}
+
+/// The G-Wing job: design and slice one section, wait for its Marlin program, print it (stage
+/// 6 of the module docs).
+async fn run_wing(
+    node: &CellNode,
+    p: &RunnerParams,
+    programs: &mut cell_runtime::Subscriber<MachineProgram>,
+    run_client: &RunClient,
+    timeout: Duration,
+) -> anyhow::Result<WingSummary> {
+    let client: SliceClient = node.action_client(&p.wing_action)?;
+    require_action_server(node, &p.wing_action, timeout).await?;
+    let dir = if p.part_dir.is_empty() {
+        std::env::temp_dir()
+    } else {
+        std::path::PathBuf::from(&p.part_dir)
+    };
+    let written = write_embedded_wing(p, &dir)?;
+    let spec_file = written
+        .as_ref()
+        .map_or(p.wing_spec.clone(), |w| w.display().to_string());
+    let goal = SliceGoal {
+        job_id: p.wing_job_id.clone(),
+        wing_spec_file: spec_file,
+        wing_section: p.wing_section,
+        ..Default::default()
+    };
+    tracing::info!(
+        "designing and slicing {} ({}, section {})",
+        p.wing_job_id,
+        p.wing_spec,
+        p.wing_section
+    );
+    let t0 = Instant::now();
+    let followed = follow(&client, goal, &p.wing_action, timeout, |f| {
+        format!("{}: layer {}/{}", f.phase, f.layers_done, f.layers_total)
+    })
+    .await;
+    if let Some(spec) = written {
+        let airfoils: Vec<_> = EMBEDDED_WINGS
+            .iter()
+            .map(|(.., a, _)| {
+                spec.with_file_name(format!(
+                    "cellsuite-{}-{}-{a}",
+                    p.wing_job_id,
+                    std::process::id()
+                ))
+            })
+            .collect();
+        let _ = std::fs::remove_file(&spec);
+        for a in airfoils {
+            let _ = std::fs::remove_file(a);
+        }
+    }
+    let (status, slice) = followed?;
+    if status != GoalStatusEnum::Succeeded || !slice.success {
+        bail!("{}: {}", p.wing_action, slice.message);
+    }
+    let slice_time = t0.elapsed();
+    tracing::info!("{}", slice.message);
+    let program = wait_for_program(programs, p, &p.wing_job_id, timeout).await?;
+    let t1 = Instant::now();
+    let run = execute(run_client, &program, &p.wing_machine_id, timeout).await?;
+    Ok(WingSummary {
+        slice,
+        slice_time,
+        program,
+        run,
+        run_time: t1.elapsed(),
+    })
+}
+
 /// Runs the job, prints the summary, and returns an error unless the program ran to its end.
 ///
 /// # Errors
@@ -615,6 +814,9 @@ pub async fn run(node: CellNode, p: RunnerParams) -> anyhow::Result<()> {
     }
     if let Some(waam) = summary.waam.as_ref().filter(|w| !w.run.success) {
         bail!("execute_program ({}): {}", p.waam_job_id, waam.run.message);
+    }
+    if let Some(wing) = summary.wing.as_ref().filter(|w| !w.run.success) {
+        bail!("execute_program ({}): {}", p.wing_job_id, wing.run.message);
     }
     Ok(())
 }

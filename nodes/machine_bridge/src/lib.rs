@@ -12,6 +12,9 @@
 //!   a safe stop (heat off) and the goal ends as canceled.
 //! - Publishes `MachineStatus` for every controller on `status_topic` at `status_rate_hz`
 //!   (≥ 5 Hz) and logs it to Rerun (position, trace, buffer fill, feed, acknowledged line).
+//!   A printer's heaters (`MachineStatus` has no temperature fields) go to Rerun and, with
+//!   `standard_views`, to `<machine>/temperature/<heater>` as `sensor_msgs/Temperature` and
+//!   into `/diagnostics`.
 //! - Takes `MachineCommand`s (hold, resume, abort, overrides) on `command_topic` and in the
 //!   `machine_command` service (`cell_msgs/srv/SendMachineCommand`), and acts on them at once:
 //!   a GRBL feed hold is one real-time byte written before anything else the link has queued,
@@ -28,6 +31,13 @@
 //!
 //! Bad input (an unknown controller, a program in the wrong dialect or for another machine, a
 //! line GRBL cannot take) gets an answer or a log line naming it; the node keeps running.
+//!
+//! Access ([`access`]): goals, commands and topic programs are taken only from `allowed_peers`
+//! (default: this host), and motion starts (a run, resume, an override) only while the bridge is
+//! armed. Arming is a local act over a Unix socket (`arm_socket`; `cell machine arm`) and ends
+//! after `arm_idle_timeout_s` without machine activity; hold and abort never need it. Every
+//! refusal is logged at WARN with the peer: a goal is rejected (the reason in the log and
+//! `/machine/log`), a service command answers `success: false` with it.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -40,13 +50,18 @@ use cell_msgs::{
 use cell_runtime::action::GoalEndStatus;
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
 use cell_runtime::service::RequestId;
-use cell_runtime::views::MachineViews;
+use cell_runtime::views::{HeaterReading, MachineViews};
 use cell_runtime::{CellNode, MachineStatusLogger, NodeParamError, QosPreset};
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc;
 
+use cell_bridge::arming::{self, Arming, MachineAct};
 use cell_bridge::config::ControllerSpec;
 use cell_bridge::controller::{choose, Controller, RunOutcome};
+use cell_runtime::peers::AllowedPeers;
+
+pub mod access;
+use access::{profile_refusal, Access};
 
 /// The action the node serves.
 pub const ACTION: &str = "execute_program";
@@ -82,9 +97,25 @@ pub struct BridgeParams {
     pub shutdown_budget_s: f64,
     /// Also publish the standard-type views for RViz and Foxglove (default true): each
     /// machine's axes on `joint_states` (`sensor_msgs/JointState`, m and rad), its tool frame
-    /// `<machine_id>/tool` on `/tf`, and the machines' health on `/diagnostics` (1 Hz); see
-    /// `cell_runtime::views`.
+    /// `<machine_id>/tool` on `/tf`, each printer heater's temperature on
+    /// `<machine>/temperature/{hotend,bed}` (`sensor_msgs/Temperature`, °C, every status tick
+    /// while connected), and the machines' health on `/diagnostics` (1 Hz, with the heaters'
+    /// current and target °C); see `cell_runtime::views`.
     pub standard_views: bool,
+    /// Who may send goals, commands and topic programs: `this_host` (loopback, this host's
+    /// addresses, this node's own participant), IP addresses, or DDS participant GUID prefixes
+    /// (`01.0f.ab.…`, 12 bytes as `ros2 node info`-style GIDs print them). A peer passes when
+    /// its prefix is listed or every address it announces is.
+    pub allowed_peers: Vec<String>,
+    /// An arming ends after this long without machine activity (s), 1..86400; `cell machine
+    /// arm --idle SECONDS` may ask for less.
+    pub arm_idle_timeout_s: f64,
+    /// Arm at start (logged): for a simulator cell or a launch file that stands for the local
+    /// act; a real cell arms at the machine (`cell machine arm`).
+    pub arm_at_start: bool,
+    /// The arm service's Unix socket; empty: `$XDG_RUNTIME_DIR/cellsuite` (else
+    /// `/tmp/cellsuite-<uid>`) `/arm-d<domain>-<node>.sock`, where `cell machine arm` looks.
+    pub arm_socket: String,
 }
 
 impl Default for BridgeParams {
@@ -100,6 +131,10 @@ impl Default for BridgeParams {
             result_timeout_s: 600.0,
             shutdown_budget_s: 4.0,
             standard_views: true,
+            allowed_peers: vec!["this_host".into()],
+            arm_idle_timeout_s: 300.0,
+            arm_at_start: false,
+            arm_socket: String::new(),
         }
     }
 }
@@ -158,13 +193,31 @@ pub fn controller_specs(p: &BridgeParams) -> Result<(Vec<ControllerSpec>, usize)
             p.feedback_period_s
         )));
     }
+    if !(p.arm_idle_timeout_s.is_finite() && (1.0..=86400.0).contains(&p.arm_idle_timeout_s)) {
+        return Err(NodeParamError(format!(
+            "arm_idle_timeout_s: {}: expected 1..86400 s",
+            p.arm_idle_timeout_s
+        )));
+    }
     Ok((specs, default))
+}
+
+/// `allowed_peers`, checked before anything starts.
+///
+/// # Errors
+/// An empty list or an entry that is no host or participant ([`NodeParamError`]).
+pub fn allowed_peers(p: &BridgeParams) -> Result<AllowedPeers, NodeParamError> {
+    AllowedPeers::parse(&p.allowed_peers).map_err(|e| {
+        let sep = if e.starts_with('[') { "" } else { ": " };
+        NodeParamError(format!("allowed_peers{sep}{e}"))
+    })
 }
 
 /// The `execute_program` goals: a controller that can take the program is chosen before the
 /// goal is accepted, and the run streams it there.
 struct Goals {
     node: CellNode,
+    access: Arc<Access>,
     controllers: Arc<Vec<Controller>>,
     default: usize,
     feedback_period: Duration,
@@ -183,6 +236,18 @@ impl GoalHandler for Goals {
         goal.program.job_id.clone()
     }
 
+    fn admit(
+        &self,
+        _goal: &ExecuteProgramGoal,
+        job_id: &str,
+        from: &[u8; 16],
+    ) -> Result<(), String> {
+        self.access.check(from, MachineAct::Run).inspect_err(|why| {
+            let line = format!("{job_id}: rejected: {why}");
+            self.node.rerun().log_text("/machine/log", &line);
+        })
+    }
+
     fn validate(
         &self,
         goal: &ExecuteProgramGoal,
@@ -190,6 +255,7 @@ impl GoalHandler for Goals {
     ) -> Result<(Controller, ExecuteProgramGoal), String> {
         let (controllers, program) = (&self.controllers, &goal.program);
         choose(controllers, self.default, &goal.machine_id, program)
+            .and_then(|c| profile_refusal(c, program).map_or(Ok(c), Err))
             .and_then(|c| {
                 c.check_program(program, goal.start_line)
                     .map(|()| c.clone())
@@ -228,6 +294,24 @@ impl GoalHandler for Goals {
 /// listen, topics or services that cannot be set up.
 pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
     let (specs, default) = controller_specs(&p)?;
+    let allowed = allowed_peers(&p)?;
+    let arming = Arc::new(Arming::new(Duration::from_secs_f64(p.arm_idle_timeout_s)));
+    let socket = if p.arm_socket.is_empty() {
+        arming::default_socket_path(node.domain_id(), &node.fully_qualified_name())
+    } else {
+        p.arm_socket.clone().into()
+    };
+    let _arm_service = arming::serve(&socket, arming.clone()).await?;
+    if p.arm_at_start {
+        let armed = arming.arm(None);
+        tracing::warn!("{armed} (arm_at_start: true)");
+    }
+    tracing::info!(
+        "taking goals and commands from {}; arm service on {}",
+        p.allowed_peers.join(", "),
+        socket.display()
+    );
+    let access = Arc::new(Access::new(node.clone(), allowed, arming.clone()));
     let mut controllers = Vec::new();
     for spec in specs {
         controllers.push(Controller::start(spec).await?);
@@ -247,6 +331,7 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
     // Goals run side by side, one per controller (a busy controller refuses a second).
     let goals = Goals {
         node: node.clone(),
+        access: access.clone(),
         controllers: controllers.clone(),
         default,
         feedback_period: Duration::from_secs_f64(p.feedback_period_s),
@@ -284,25 +369,58 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
             _ = status_tick.tick() => {
                 let stamp = node.now();
                 let mut statuses = Vec::with_capacity(controllers.len());
+                let mut heater_readings = Vec::new();
+                let mut busy = false;
                 for c in controllers.iter() {
                     let mut s = c.status();
+                    busy |= matches!(s.state, MachineStatus::STATE_RUNNING | MachineStatus::STATE_HOLD);
                     s.header = Header { stamp, frame_id: s.machine_id.clone() };
                     node.rerun().set_time(&stamp, frame);
                     rerun_logger.log(node.rerun(), &s);
+                    let heaters: Vec<_> = c
+                        .heaters()
+                        .iter()
+                        .map(|h| (h.name, h.current_c, h.target_c))
+                        .collect();
+                    rerun_logger.log_heaters(node.rerun(), &s.machine_id, &heaters);
+                    // A lost link's last reading is old news: no view presents it as current.
+                    if s.state != MachineStatus::STATE_DISCONNECTED {
+                        heater_readings.extend(heaters.iter().map(|&(heater, current_c, target_c)| HeaterReading {
+                            machine_id: s.machine_id.clone(),
+                            heater: heater.to_owned(),
+                            current_c,
+                            target_c,
+                        }));
+                    }
                     if let Err(e) = status_pub.publish(s.clone()).await {
                         tracing::warn!("{}: {e:#}", status_pub.topic());
                     }
                     statuses.push(s);
                 }
-                views.publish(&statuses).await;
+                views.publish(&statuses, &heater_readings).await;
                 frame += 1;
+                // A machine that moves or holds keeps an arming alive; an idle one lets it
+                // expire (and the expiry is logged now rather than at the next request).
+                if busy { access.arming.touch() } else { access.arming.is_armed(); }
             }
             received = commands.recv() => {
                 let Some(r) = received else { anyhow::bail!("{}: the subscription ended", p.command_topic) };
-                command_queue.push(None, r.message);
+                match access.check_command(&r.writer_gid, &r.message) {
+                    Ok(()) => command_queue.push(None, r.message),
+                    Err(why) => refused(&node, &p.command_topic, &why),
+                }
             }
             (id, request) = command_server.receive() => {
-                command_queue.push(Some(id), request.command);
+                match access.check_command(&id.writer_gid.to_bytes16(), &request.command) {
+                    Ok(()) => command_queue.push(Some(id), request.command),
+                    Err(why) => {
+                        refused(&node, command_server.name(), &why);
+                        let answer = SendMachineCommandResponse { success: false, message: why };
+                        if let Err(e) = command_server.respond(id, answer).await {
+                            tracing::warn!("{e:#}");
+                        }
+                    }
+                }
             }
             Some(done) = command_queue.done.recv() => {
                 let CommandDone { request, success, message } = done;
@@ -331,7 +449,11 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
             received = async { programs.as_mut().expect("guarded").recv().await }, if programs.is_some() => {
                 let Some(r) = received else { anyhow::bail!("{}: the subscription ended", p.program_topic) };
                 let program = r.message;
-                match choose(&controllers, default, "", &program) {
+                let chosen = access
+                    .check(&r.writer_gid, MachineAct::Run)
+                    .and_then(|()| choose(&controllers, default, "", &program))
+                    .and_then(|c| profile_refusal(c, &program).map_or(Ok(c), Err));
+                match chosen {
                     Ok(c) => {
                         let (c, node, ended) = (c.clone(), node.clone(), ended_tx.clone());
                         tokio::spawn(async move {
@@ -341,7 +463,7 @@ pub async fn run(node: CellNode, p: BridgeParams) -> anyhow::Result<()> {
                             let _ = ended.send(());
                         });
                     }
-                    Err(why) => tracing::warn!("{}: {}: {why}", p.program_topic, program.job_id),
+                    Err(why) => refused(&node, &p.program_topic, &format!("{}: {why}", program.job_id)),
                 }
             }
             _ = node.shutdown().requested() => {
@@ -421,6 +543,13 @@ async fn run_goal(
             }
         }
     }
+}
+
+/// Logs a refused request (WARN, and `/machine/log`).
+fn refused(node: &CellNode, at: &str, why: &str) {
+    tracing::warn!("{at}: {why}");
+    node.rerun()
+        .log_text("/machine/log", &format!("{at}: {why}"));
 }
 
 /// Logs how a run ended.
@@ -571,6 +700,27 @@ mod tests {
             ..BridgeParams::default()
         });
         assert!(e.starts_with("status_rate_hz"), "{e}");
+        let e = err(BridgeParams {
+            arm_idle_timeout_s: 0.0,
+            ..BridgeParams::default()
+        });
+        assert!(e.starts_with("arm_idle_timeout_s"), "{e}");
+        let peers = |list: &[&str]| {
+            allowed_peers(&BridgeParams {
+                allowed_peers: list.iter().map(|s| s.to_string()).collect(),
+                ..BridgeParams::default()
+            })
+        };
+        assert!(peers(&[])
+            .unwrap_err()
+            .0
+            .starts_with("allowed_peers: empty"));
+        let e = peers(&["this_host", "cell-pc"]).unwrap_err().0;
+        assert!(
+            e.starts_with("allowed_peers[1]") && e.contains("cell-pc"),
+            "{e}"
+        );
+        assert!(peers(&["this_host", "10.0.0.5", "010fab123456789abcdef011"]).is_ok());
         let (specs, default) = controller_specs(&BridgeParams {
             controllers: vec!["grbl-sim".into(), "abb-irb2600-waam".into()],
             default_controller: "abb-irb2600-waam".into(),

@@ -9,6 +9,10 @@
 //! the final maps, log to Rerun and send the result. A failed job ends its goal as aborted with
 //! the error; the node keeps serving. Goals are planned one at a time, in arrival order.
 //!
+//! A goal's `machine_profile`, `root_airfoil` or `tip_airfoil` that is a path must be a
+//! regular file under `data_dirs` within `max_file_mib` ([`cell_runtime::data_files`]); a
+//! refusal or a file that does not parse never quotes the file.
+//!
 //! A goal naming a tip (airfoil, chord, twist or sweep) plans a tapered panel on a 4-axis
 //! machine; the toolpath is in the machine profile's carriage coordinates. A cancel request
 //! for the executing goal stops the swarm within one iteration and ends the goal as canceled.
@@ -16,6 +20,7 @@
 use std::{ops::ControlFlow, time::Duration};
 
 use cell_msgs::{HeatMap, PlanHotwireFeedback, PlanHotwireGoal, PlanHotwireResult, Toolpath};
+use cell_runtime::data_files::{self, DataDirs};
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
 use cell_runtime::views::{HeatMapView, ToolpathViews};
 use cell_runtime::{CellNode, Publisher, QosPreset};
@@ -82,6 +87,11 @@ pub struct PlannerParams {
     /// (`visualization_msgs/MarkerArray`), the heat maps on `exposure/image` and
     /// `exposure_matrix/image` (`sensor_msgs/Image`, `32FC1`); see `cell_runtime::views`.
     pub standard_views: bool,
+    /// Directories a goal's airfoil or machine profile path must lie in (relative: to the
+    /// working directory); see `cell_runtime::data_files`.
+    pub data_dirs: Vec<String>,
+    /// Largest file a goal may name, MiB.
+    pub max_file_mib: u64,
 }
 
 impl Default for PlannerParams {
@@ -108,6 +118,8 @@ impl Default for PlannerParams {
             exposure_period_s: 1.0,
             result_timeout_s: 600.0,
             standard_views: true,
+            data_dirs: data_files::default_data_dirs(),
+            max_file_mib: data_files::DEFAULT_MAX_FILE_MIB,
         }
     }
 }
@@ -126,12 +138,12 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
     if goal.root_airfoil.is_empty() {
         return Err("root_airfoil is empty".into());
     }
-    let machine_name = if goal.machine_profile.is_empty() {
-        &p.machine_profile
+    let data_dirs = DataDirs::from_params(&p.data_dirs, p.max_file_mib);
+    let machine = if goal.machine_profile.is_empty() {
+        MachineProfile::resolve(&p.machine_profile).map_err(|e| e.to_string())?
     } else {
-        &goal.machine_profile
+        data_dirs.machine_profile("machine_profile", &goal.machine_profile)?
     };
-    let machine = MachineProfile::resolve(machine_name).map_err(|e| e.to_string())?;
     let root_airfoil = AirfoilSource::parse(&goal.root_airfoil);
     // Empty strings and zeros are the goal's "not given".
     let given = |v: f64| (v != 0.0).then_some(v);
@@ -147,7 +159,7 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
         goal.root_chord_mm,
         p.twist_pivot_chord_fraction,
     );
-    let job = HotwireJob {
+    let mut job = HotwireJob {
         root_airfoil,
         chord_mm: goal.root_chord_mm,
         tip,
@@ -194,11 +206,30 @@ pub fn goal_to_job(goal: &PlanHotwireGoal, p: &PlannerParams) -> Result<HotwireJ
     };
     job::validate(&job).map_err(|e| e.to_string())?;
     job.pso.validate().map_err(|e| e.to_string())?;
-    job.root_airfoil.load().map_err(|e| e.to_string())?;
-    if let Some(t) = &job.tip {
-        t.airfoil.load().map_err(|e| e.to_string())?;
+    confine_airfoil(&data_dirs, "root_airfoil", &mut job.root_airfoil)?;
+    if let Some(t) = &mut job.tip {
+        confine_airfoil(&data_dirs, "tip_airfoil", &mut t.airfoil)?;
     }
     Ok(job)
+}
+
+/// An airfoil file must pass `data_dirs` (then it is read by its canonical path); it is loaded
+/// once here so a bad one rejects the goal, with the error's quoted values blanked.
+fn confine_airfoil(
+    data_dirs: &DataDirs,
+    field: &str,
+    airfoil: &mut AirfoilSource,
+) -> Result<(), String> {
+    let AirfoilSource::File(path) = airfoil else {
+        return airfoil.load().map(drop).map_err(|e| e.to_string());
+    };
+    *path = data_dirs
+        .check(&path.to_string_lossy())
+        .map_err(|e| format!("{field}: {e}"))?;
+    airfoil
+        .load()
+        .map(drop)
+        .map_err(|e| format!("{field}: {}", data_files::without_content(&e.to_string())))
 }
 
 /// What the planning thread reports to the node.

@@ -14,6 +14,12 @@
 //!   this suite does not know is skipped with one warning.
 //! - **Selection**: `topics`/`exclude` regexes (whole-name, as the recorder's) and `remap`
 //!   (`from:=to`) pick and rename topics.
+//! - **Safe by default**: topics of the [`MACHINE_TYPES`] (programs, machine commands, their
+//!   service requests and action goals: what makes a `machine_bridge` move a machine) are left
+//!   out, with one line naming them, unless an entry of `topics` names one exactly. When one is
+//!   played, the replay first looks for a machine bridge on the domain (a reader of a machine
+//!   type, or of the topics it would publish them on; [`BRIDGE_DISCOVERY`]) and refuses (exit
+//!   64, naming what it found) unless `allow_machine_topics` (`--allow-machine-topics`).
 //!
 //! - **Clock**: with `clock_hz` > 0 (`cell bag play --clock [HZ]`) the node is a ROS time
 //!   source, as `ros2 bag play --clock`: it publishes the bag's time (the recorded log time
@@ -80,6 +86,8 @@ pub struct ReplayerParams {
     pub progress_every_s: f64,
     /// Publish the bag's time on `/clock` this many times a second (0: not at all).
     pub clock_hz: f64,
+    /// Play machine topics (named in `topics`) even onto a domain where a machine bridge runs.
+    pub allow_machine_topics: bool,
 }
 
 impl Default for ReplayerParams {
@@ -97,9 +105,35 @@ impl Default for ReplayerParams {
             linger_s: 1.0,
             progress_every_s: 5.0,
             clock_hz: 0.0,
+            allow_machine_topics: false,
         }
     }
 }
+
+/// Types whose messages make a machine move: `machine_bridge` runs every `MachineProgram` on
+/// its program topic and acts on `MachineCommand`s (topic and service) and `execute_program`
+/// goals at once. A replay leaves their topics out unless one is named (module docs).
+pub const MACHINE_TYPES: [&str; 5] = [
+    "cell_msgs/msg/MachineProgram",
+    "cell_msgs/msg/MachineCommand",
+    "cell_msgs/srv/SendMachineCommand_Request",
+    "cell_msgs/action/ExecuteProgram_Goal",
+    "cell_msgs/action/ExecuteProgram_SendGoal_Request",
+];
+
+/// Whether `ros_type` is one of the [`MACHINE_TYPES`].
+pub fn is_machine_type(ros_type: &str) -> bool {
+    MACHINE_TYPES.contains(&ros_type)
+}
+
+/// Whether an entry of `topics` is `topic`'s name itself, rather than a pattern matching it.
+fn named(topics: &[String], topic: &str) -> bool {
+    topics.iter().any(|t| t == topic)
+}
+
+/// How long a replay of machine topics looks for a machine bridge on the domain before it
+/// starts (discovery on one host takes well under a second; across hosts, a few).
+pub const BRIDGE_DISCOVERY: Duration = Duration::from_secs(3);
 
 /// Topic renames from `remap` entries, `"from:=to"`.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -238,6 +272,8 @@ pub struct ReplaySummary {
     pub unknown_type: u64,
     /// Messages before the start offset (first pass).
     pub before_offset: u64,
+    /// Machine topics left out (not named in `topics`) and their messages.
+    pub machine_left_out: Vec<(String, u64)>,
     /// Passes started.
     pub passes: u32,
     /// Topics played.
@@ -274,8 +310,24 @@ impl fmt::Display for ReplaySummary {
                 write!(f, "; {n} {what}")?;
             }
         }
+        if !self.machine_left_out.is_empty() {
+            write!(
+                f,
+                "; left out machine topics {}",
+                left_out(&self.machine_left_out)
+            )?;
+        }
         Ok(())
     }
+}
+
+/// `/a (3 messages), /b (1 message)`.
+fn left_out(topics: &[(String, u64)]) -> String {
+    let each: Vec<String> = topics
+        .iter()
+        .map(|(t, n)| format!("{t} ({n} message{})", if *n == 1 { "" } else { "s" }))
+        .collect();
+    each.join(", ")
 }
 
 /// A bag opened and checked for replay; [`Replay::run`] plays it.
@@ -283,6 +335,8 @@ pub struct Replay {
     path: PathBuf,
     reader: BagReader,
     plans: Vec<TopicPlan>,
+    machine_left_out: Vec<(String, u64)>,
+    allow_machine_topics: bool,
     bag_start_ns: u64,
     rate: f64,
     looping: bool,
@@ -354,8 +408,13 @@ impl Replay {
         let info = reader.info();
 
         let mut plans = Vec::new();
+        let mut machine_left_out = Vec::new();
         let mut outputs: HashMap<String, (String, Option<usize>)> = HashMap::new();
         for t in info.topics.iter().filter(|t| filter.wants(&t.name)) {
+            if is_machine_type(&t.type_name) && !named(&p.topics, &t.name) {
+                machine_left_out.push((t.name.clone(), t.message_count));
+                continue;
+            }
             let (output, remap) = remaps.apply(&t.name);
             let (qos, note) = preset_for(&t.offered_qos_profiles);
             if let Some(note) = note {
@@ -393,6 +452,22 @@ impl Replay {
                 known,
             });
         }
+        if !machine_left_out.is_empty() {
+            tracing::info!(
+                "left out machine topics {} (they would drive a machine); name one in topics \
+                 (--topics) to play it",
+                left_out(&machine_left_out)
+            );
+        }
+        if plans.is_empty() && !machine_left_out.is_empty() {
+            return Err(NodeParamError(format!(
+                "topics: every selected topic of {} is a machine topic ({}); name one in topics \
+                 (--topics) to play it",
+                path.display(),
+                left_out(&machine_left_out)
+            ))
+            .into());
+        }
         if plans.is_empty() && !info.topics.is_empty() {
             let names: Vec<&str> = info.topics.iter().map(|t| t.name.as_str()).collect();
             return Err(NodeParamError(format!(
@@ -411,6 +486,8 @@ impl Replay {
             path,
             reader,
             plans,
+            machine_left_out,
+            allow_machine_topics: p.allow_machine_topics,
             rate,
             looping: p.r#loop,
             start_offset,
@@ -424,6 +501,11 @@ impl Replay {
     /// The selected topics (those of unknown type included, marked).
     pub fn topics(&self) -> &[TopicPlan] {
         &self.plans
+    }
+
+    /// Machine topics left out because `topics` does not name them, with their messages.
+    pub fn machine_topics_left_out(&self) -> &[(String, u64)] {
+        &self.machine_left_out
     }
 
     /// Messages of the played topics in the bag (before the start offset is applied).
@@ -452,6 +534,8 @@ impl Replay {
             path,
             reader,
             plans,
+            machine_left_out,
+            allow_machine_topics,
             bag_start_ns,
             rate,
             looping,
@@ -489,6 +573,31 @@ impl Replay {
             route.push(Some(index));
         }
         let topics = publishers.len();
+        let machine_outputs: Vec<&str> = plans
+            .iter()
+            .zip(&route)
+            .filter(|(plan, route)| is_machine_type(&plan.ros_type) && route.is_some())
+            .filter_map(|(_, route)| route.map(|i| publishers[i].topic()))
+            .collect();
+        if !machine_outputs.is_empty() {
+            if allow_machine_topics {
+                tracing::warn!(
+                    "playing machine topics {} (allow_machine_topics): a machine bridge on \
+                     domain {} will act on them",
+                    machine_outputs.join(", "),
+                    node.domain_id()
+                );
+            } else if let Some(bridge) = find_bridge(node, &machine_outputs).await {
+                return Err(NodeParamError(format!(
+                    "refusing to play machine topics {} onto ROS domain {}: a machine bridge \
+                     or another reader of machine messages runs there ({bridge}) and would act on them; pass --allow-machine-topics \
+                     (parameter allow_machine_topics) to play them anyway",
+                    machine_outputs.join(", "),
+                    node.domain_id()
+                ))
+                .into());
+            }
+        }
         let mut time_source = match clock_period {
             Some(period) => Some(TimeSource::new(
                 node,
@@ -725,12 +834,40 @@ impl Replay {
             undecodable: stats.undecodable.load(Ordering::Relaxed),
             unknown_type,
             before_offset: stats.before_offset.load(Ordering::Relaxed),
+            machine_left_out,
             passes: progress.pass,
             topics,
             elapsed: first_at.map_or(Duration::ZERO, |f| last_at.saturating_duration_since(f)),
             stopped,
             rate,
         })
+    }
+}
+
+/// Looks for a machine bridge for up to [`BRIDGE_DISCOVERY`] (ending early once one is
+/// seen): a reader of a [`MACHINE_TYPES`] type on any topic or service (`machine_bridge`
+/// always has its `machine_command` topic and service and its `execute_program` action), or of
+/// `outputs`, the topics the replay would publish machine messages on. The replay itself
+/// reads none of these. Returns what it found, in words.
+async fn find_bridge(node: &CellNode, outputs: &[&str]) -> Option<String> {
+    let deadline = tokio::time::Instant::now() + BRIDGE_DISCOVERY;
+    loop {
+        let found: Vec<String> = node
+            .discovered_readers()
+            .into_iter()
+            .filter(|r| {
+                is_machine_type(&r.ros_type)
+                    || outputs.iter().any(|o| r.dds_topic == format!("rt{o}"))
+            })
+            .map(|r| format!("a reader of {} on {}", r.ros_type, r.dds_topic))
+            .collect();
+        if !found.is_empty() {
+            return Some(found.join(", "));
+        }
+        if tokio::time::Instant::now() >= deadline || node.shutdown().is_triggered() {
+            return None;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
     }
 }
 
@@ -1211,6 +1348,84 @@ mod tests {
     }
 
     #[test]
+    fn machine_topics_are_left_out_unless_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let bag = dir.path().join("m");
+        let mut w = cell_bag::BagWriter::create(&bag, Default::default()).unwrap();
+        w.write(
+            "/cell/machine_program",
+            &cell_msgs::MachineProgram::default(),
+            1,
+        )
+        .unwrap();
+        w.write(
+            "/cell/machine_command",
+            &cell_msgs::MachineCommand::default(),
+            2,
+        )
+        .unwrap();
+        w.write(
+            "/cell/machine_command",
+            &cell_msgs::MachineCommand::default(),
+            3,
+        )
+        .unwrap();
+        w.write("/cell/note", &cell_msgs::std_msgs::StringMsg::default(), 4)
+            .unwrap();
+        w.finish().unwrap();
+        let all = ReplayerParams {
+            bag: bag.display().to_string(),
+            ..ReplayerParams::default()
+        };
+        let played =
+            |r: &Replay| -> Vec<String> { r.topics().iter().map(|t| t.topic.clone()).collect() };
+        // Every topic matches `.*`, but the machine topics are not named: left out.
+        let r = Replay::open(&all).unwrap();
+        assert_eq!(played(&r), ["/cell/note"]);
+        assert_eq!(
+            r.machine_topics_left_out(),
+            [
+                ("/cell/machine_program".to_owned(), 1),
+                ("/cell/machine_command".to_owned(), 2)
+            ]
+        );
+        assert_eq!(r.messages(), 1);
+        // Named: played; a pattern matching it is not a name.
+        let named = ReplayerParams {
+            topics: vec![".*".into(), "/cell/machine_program".into()],
+            ..all.clone()
+        };
+        let r = Replay::open(&named).unwrap();
+        assert_eq!(played(&r), ["/cell/machine_program", "/cell/note"]);
+        assert_eq!(
+            r.machine_topics_left_out(),
+            [("/cell/machine_command".to_owned(), 2)]
+        );
+        // Only machine topics selected and none named: refused, naming them.
+        let only = ReplayerParams {
+            topics: vec!["/cell/machine_.*".into()],
+            ..all.clone()
+        };
+        let e = Replay::open(&only).err().expect("refused");
+        let e = e
+            .downcast_ref::<NodeParamError>()
+            .expect("a parameter error");
+        assert!(
+            e.0.starts_with("topics: every selected topic")
+                && e.0.contains("/cell/machine_program (1 message)"),
+            "{}",
+            e.0
+        );
+        // The names are real: every one but the action's wire-level SendGoal is a known type.
+        for t in MACHINE_TYPES {
+            assert!(
+                decoder_for(t).is_some() || t.ends_with("_SendGoal_Request"),
+                "{t}"
+            );
+        }
+    }
+
+    #[test]
     fn the_summary_is_one_line_with_what_was_left_out() {
         let mut summary = ReplaySummary {
             published: 12,
@@ -1218,6 +1433,7 @@ mod tests {
             undecodable: 0,
             unknown_type: 0,
             before_offset: 0,
+            machine_left_out: Vec::new(),
             passes: 1,
             topics: 1,
             elapsed: Duration::from_millis(2500),
@@ -1237,6 +1453,10 @@ mod tests {
             "replayed 12 messages on 1 topic in 2.5 s at ×2 (3 passes), stopped early; \
              2 before the start offset; 4 of unknown types"
         );
+        summary.machine_left_out = vec![("/m".into(), 1), ("/c".into(), 3)];
+        assert!(summary
+            .to_string()
+            .ends_with("; left out machine topics /m (1 message), /c (3 messages)"));
     }
 
     #[test]

@@ -17,13 +17,17 @@
 //! its result carrying that plan (`success = false`); nothing is published for the emitter.
 //! Cancel requests for other goals are refused.
 //!
+//! A goal's `layout_file` and a `machine_profile` that is a path must be regular files under
+//! `data_dirs` within `max_file_mib` ([`cell_runtime::data_files`]); a refusal, or a layout
+//! file that does not parse, never quotes the file.
+//!
 //! Rerun entities (the suite's `/sheet/…` tree): `/sheet/heat` (the raster over the `sim_step`
 //! timeline),
 //! `/sheet/toolpath` (the toolpath as line strips coloured by segment kind: cut vs travel),
 //! `/sheet/overheats` (points at the pierce points of the cuts that overheated, radius by count),
 //! `/sheet/best_cost` (the feedback's best cost over the `iteration` timeline) and `/sheet/log`.
 
-use std::path::PathBuf;
+use cell_runtime::data_files::{without_content, DataDirs};
 
 use cell_msgs::{
     geometry_msgs::Point, std_msgs::Header, CutPlan as CutPlanMsg, HeatMap, SequenceSheetFeedback,
@@ -101,6 +105,11 @@ pub struct SequencerParams {
     /// (`visualization_msgs/MarkerArray`), the heat frames on `sheet_heat/image`
     /// (`sensor_msgs/Image`, `32FC1`); see `cell_runtime::views`.
     pub standard_views: bool,
+    /// Directories a goal's layout file or machine profile path must lie in (relative: to the
+    /// working directory); see `cell_runtime::data_files`.
+    pub data_dirs: Vec<String>,
+    /// Largest file a goal may name, MiB.
+    pub max_file_mib: u64,
 }
 
 impl Default for SequencerParams {
@@ -127,6 +136,8 @@ impl Default for SequencerParams {
             cost: CostParams::default(),
             result_timeout_s: 600.0,
             standard_views: true,
+            data_dirs: cell_runtime::data_files::default_data_dirs(),
+            max_file_mib: cell_runtime::data_files::DEFAULT_MAX_FILE_MIB,
         }
     }
 }
@@ -159,13 +170,21 @@ pub fn goal_to_job(
     if !(budget_s.is_finite() && budget_s >= 0.0) {
         return Err(format!("time_budget_s {budget_s}: must be finite and ≥ 0"));
     }
+    let data_dirs = DataDirs::from_params(&p.data_dirs, p.max_file_mib);
     let layout = match (goal.layout_file.is_empty(), goal.layout_json.is_empty()) {
-        (false, _) => LayoutSource::File(PathBuf::from(&goal.layout_file)),
+        (false, _) => LayoutSource::File(
+            data_dirs
+                .check(&goal.layout_file)
+                .map_err(|e| format!("layout_file: {e}"))?,
+        ),
         (true, false) => LayoutSource::Json(goal.layout_json.clone()),
         (true, true) => return Err("layout_file and layout_json are both empty".into()),
     };
-    let machine = MachineProfile::resolve(&or(&goal.machine_profile, &p.machine_profile))
-        .map_err(|e| format!("machine_profile: {e}"))?;
+    let machine = if goal.machine_profile.is_empty() {
+        MachineProfile::resolve(&p.machine_profile).map_err(|e| format!("machine_profile: {e}"))?
+    } else {
+        data_dirs.machine_profile("machine_profile", &goal.machine_profile)?
+    };
     let sheet_origin = match p.sheet_origin[..] {
         [] => None,
         [x, y] if x.is_finite() && y.is_finite() => Some([x, y]),
@@ -205,6 +224,11 @@ pub fn goal_to_job(
         sheet_origin,
         travel: Some(Travel::of(&machine)),
     };
+    // Sizes over their limits (issue 23) reject the goal up front, naming the parameter.
+    if job.improve {
+        job.improve_params.validate().map_err(|e| e.to_string())?;
+    }
+    job.pierce_options.validate().map_err(|e| e.to_string())?;
     let opt = ToolpathOptions {
         cut_mm_s: p.thermal.cut_speed_mm_s.min(machine.max_feed_mm_s),
         rapid_mm_s: p.thermal.rapid_speed_mm_s.min(machine.max_feed_mm_s),
@@ -332,6 +356,8 @@ impl GoalHandler for Sequencer {
             "sequence_sheet: sequencing {job_id} (seed {})",
             sheet_job.seed
         );
+        // A layout file's errors may quote it; the caller gets them blanked.
+        let from_file = matches!(sheet_job.layout, LayoutSource::File(_));
         let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel();
         let (every, frame_every, max_frames, t_max) = (
             self.p.feedback_every.max(1),
@@ -400,6 +426,7 @@ impl GoalHandler for Sequencer {
         let (outcome, ()) = tokio::join!(sequencing, forwarding);
         let out = match outcome? {
             Ok(out) => out,
+            Err(e) if from_file => return Ok(failed(&job_id, without_content(&e.to_string()))),
             Err(e) => return Ok(failed(&job_id, e.to_string())),
         };
         let mut toolpath = to_toolpath(&out.problem, &out.plan, &job_id, &opt);
@@ -540,6 +567,33 @@ mod tests {
             .unwrap();
         let p: SequencerParams = sources.parse().unwrap();
         assert_eq!(p, SequencerParams::default());
+    }
+
+    #[test]
+    fn parameters_over_their_limits_reject_the_goal() {
+        let goal = SequenceSheetGoal {
+            layout_json: "{}".into(),
+            improve: true,
+            ..Default::default()
+        };
+        let at = SequencerParams {
+            max_iterations: cell_sequencer::improve::MAX_IMPROVE_ITERATIONS,
+            ..SequencerParams::default()
+        };
+        assert!(goal_to_job(&goal, &at).is_ok());
+        let over = SequencerParams {
+            max_iterations: at.max_iterations + 1,
+            ..at.clone()
+        };
+        let e = goal_to_job(&goal, &over).unwrap_err();
+        assert_eq!(
+            e,
+            "parameter `max_iterations` = 100001: must be in [0, 100000] (MAX_IMPROVE_ITERATIONS)"
+        );
+        let mut pierce = SequencerParams::default();
+        pierce.pierce_options.max_candidates = 1000;
+        let e = goal_to_job(&goal, &pierce).unwrap_err();
+        assert!(e.ends_with("(MAX_PIERCE_CANDIDATES)"), "{e}");
     }
 
     #[test]

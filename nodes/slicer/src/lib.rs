@@ -16,6 +16,11 @@
 //! A cancel request for the running goal is accepted: the job stops after its current layer,
 //! the goal ends as canceled and nothing is published.
 //!
+//! A goal's `stl_file`, `wing_spec_file`, `process_file` and a `machine_profile` that is a
+//! path must be regular files under `data_dirs` within `max_file_mib`
+//! ([`cell_runtime::data_files`]); a refusal, or a file that does not parse, never quotes the
+//! file (a failed goal's message has its quoted values blanked).
+//!
 //! Rerun entities (the suite's `/waam/…` tree), over the `layer` timeline (one step per layer):
 //! `/waam/layers/contours` (the layer's closed contours as line strips: outer contours blue, holes
 //! red), `/waam/layers/beads` (the deposit pieces as line strips, radius half the bead width, coloured
@@ -32,10 +37,11 @@
 
 use cell_msgs::{LayerStack, SliceFeedback, SliceGoal, SliceResult, Toolpath};
 use cell_profiles::MachineProfile;
+use cell_runtime::data_files::{self, without_content, DataDirs};
 use cell_runtime::goal_server::{self, GoalContext, GoalEnd, GoalHandler, ServeOptions};
 use cell_runtime::views::ToolpathViews;
 use cell_runtime::{CellNode, Publisher, QosPreset};
-use cell_waam::{LayerToolpath, SegmentKind};
+use cell_waam::{LayerToolpath, SegmentKind, WaamProcess};
 use serde::{Deserialize, Serialize};
 
 use cell_slicer::job::{self, JobProgress, PartSource, Placement, SliceJob, SliceOutcome};
@@ -65,10 +71,18 @@ pub struct SlicerParams {
     /// Machine profile of wing goals (seed 002) whose `machine_profile` is empty: every point
     /// of the section must lie within its travel.
     pub wing_machine_profile: String,
+    /// Print only the first N layers of a wing goal's section (0: all): a short print of the
+    /// section's base, as `cell wing --layers` (the demo's wing job).
+    pub wing_max_layers: u32,
     /// Also publish the standard-type views for RViz and Foxglove (default true): the
     /// toolpath on `toolpath/path` (`nav_msgs/Path`) and `toolpath/markers`
     /// (`visualization_msgs/MarkerArray`, one marker per layer); see `cell_runtime::views`.
     pub standard_views: bool,
+    /// Directories a goal's STL, wing spec, process or machine profile path must lie in
+    /// (relative: to the working directory); see `cell_runtime::data_files`.
+    pub data_dirs: Vec<String>,
+    /// Largest file a goal may name, MiB.
+    pub max_file_mib: u64,
 }
 
 impl Default for SlicerParams {
@@ -80,7 +94,10 @@ impl Default for SlicerParams {
             log_stock_mesh: true,
             result_timeout_s: 600.0,
             wing_machine_profile: "marlin-extruder".into(),
+            wing_max_layers: 0,
             standard_views: true,
+            data_dirs: data_files::default_data_dirs(),
+            max_file_mib: data_files::DEFAULT_MAX_FILE_MIB,
         }
     }
 }
@@ -123,28 +140,37 @@ pub fn goal_to_job(
     goal: &SliceGoal,
     p: &SlicerParams,
 ) -> Result<(SliceJob, MachineProfile), String> {
+    let data_dirs = DataDirs::from_params(&p.data_dirs, p.max_file_mib);
+    let checked =
+        |field: &str, name: &str| data_dirs.check(name).map_err(|e| format!("{field}: {e}"));
     let part = match (goal.stl_file.is_empty(), goal.wing_spec_file.is_empty()) {
-        (false, true) => PartSource::Stl(goal.stl_file.clone().into()),
+        (false, true) => PartSource::Stl(checked("stl_file", &goal.stl_file)?),
         (true, false) => PartSource::WingSpec {
-            file: goal.wing_spec_file.clone().into(),
+            file: checked("wing_spec_file", &goal.wing_spec_file)?,
             section: goal.wing_section as usize,
         },
         (true, true) => return Err("stl_file and wing_spec_file are both empty".into()),
         (false, false) => return Err("give stl_file or wing_spec_file, not both".into()),
     };
-    let machine_name = match (goal.machine_profile.is_empty(), &part) {
-        (false, _) => &goal.machine_profile,
-        (true, PartSource::WingSpec { .. }) => &p.wing_machine_profile,
-        (true, PartSource::Stl(_)) => &p.machine_profile,
+    let machine = match (goal.machine_profile.is_empty(), &part) {
+        (false, _) => data_dirs.machine_profile("machine_profile", &goal.machine_profile)?,
+        (true, PartSource::WingSpec { .. }) => MachineProfile::resolve(&p.wing_machine_profile)
+            .map_err(|e| format!("machine_profile: {e}"))?,
+        (true, PartSource::Stl(_)) => MachineProfile::resolve(&p.machine_profile)
+            .map_err(|e| format!("machine_profile: {e}"))?,
     };
-    let machine =
-        MachineProfile::resolve(machine_name).map_err(|e| format!("machine_profile: {e}"))?;
-    let process_source = if goal.process_file.is_empty() {
-        &p.process_file
-    } else {
-        &goal.process_file
+    let (process, process_name) = match goal.process_file.as_str() {
+        "" => job::load_process(&p.process_file).map_err(|e| e.to_string())?,
+        "waam" => job::load_process("waam").map_err(|e| e.to_string())?,
+        named => {
+            let field = |e: &dyn std::fmt::Display| format!("process_file: {e}");
+            let file = data_dirs.read(named).map_err(|e| field(&e))?;
+            let text = file.text().map_err(|e| field(&e))?;
+            let process = WaamProcess::from_yaml_str(text, named)
+                .map_err(|e| field(&without_content(&e.to_string())))?;
+            (process, named.to_owned())
+        }
     };
-    let (process, process_name) = job::load_process(process_source).map_err(|e| e.to_string())?;
     let h = goal.layer_height_mm;
     if !(h.is_finite() && h >= 0.0) {
         return Err(format!(
@@ -359,7 +385,8 @@ impl GoalHandler for Slicer {
         tracing::info!("slice: {job_id} ({:?})", slice_job.part);
         let done = match slice_job.part.clone() {
             PartSource::WingSpec { file, section } => {
-                serve_wing(&self.node, &ctx, file, section, &machine).await?
+                let max_layers = self.p.wing_max_layers as usize;
+                serve_wing(&self.node, &ctx, (file, section, max_layers), &machine).await?
             }
             PartSource::Stl(_) => {
                 serve_mesh(&self.node, &ctx, slice_job, &machine, self.p.log_stock_mesh).await?
@@ -381,7 +408,8 @@ impl GoalHandler for Slicer {
                     ..Default::default()
                 })
             }
-            Err(Unserved::Failed(e)) => failed(&job_id, e),
+            // The part's reader may quote the file: blanked for the caller.
+            Err(Unserved::Failed(e)) => failed(&job_id, without_content(&e)),
         })
     }
 }
@@ -474,17 +502,17 @@ async fn serve_mesh(
 async fn serve_wing(
     node: &CellNode,
     ctx: &GoalContext<SliceFeedback>,
-    file: std::path::PathBuf,
-    section: usize,
+    (file, section, max_layers): (std::path::PathBuf, usize, usize),
     machine: &MachineProfile,
 ) -> anyhow::Result<Served> {
     let job_id = ctx.job_id().to_string();
     let id = job_id.clone();
     let outcome = ctx
         .run_blocking(move |ctx| {
-            cell_slicer::wing::run_wing_until(
+            cell_slicer::wing::run_wing_layers(
                 &file,
                 section,
+                max_layers,
                 &id,
                 FRAME_ID,
                 |pr| ctx.feedback(feedback(pr)),
@@ -513,12 +541,19 @@ async fn serve_wing(
     let mut stack = out.stack.clone();
     stack.header.stamp = now;
     let f = &out.report.section;
+    let layers = if f.layers < out.report.layers_in_section {
+        format!(
+            "the first {} of {} layers",
+            f.layers, out.report.layers_in_section
+        )
+    } else {
+        format!("{} layers", f.layers)
+    };
     let message = format!(
-        "printed {job_id}: wing section {section} ({} {}), {} layers, {:.1} g, {:.0} min \
+        "printed {job_id}: wing section {section} ({} {}), {layers}, {:.1} g, {:.0} min \
          (c_L {:.3})",
         f.side,
         f.position,
-        f.layers,
         f.mass_g,
         f.build_time_s / 60.0,
         out.report.c_l
@@ -629,9 +664,12 @@ mod tests {
 
     #[test]
     fn goals_map_to_jobs_and_bad_ones_are_named() {
-        let p = SlicerParams::default();
+        let p = SlicerParams {
+            data_dirs: vec![concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data").into()],
+            ..SlicerParams::default()
+        };
         let goal = SliceGoal {
-            stl_file: "part.stl".into(),
+            stl_file: "stl/20mm-xyz-cube.stl".into(),
             ..Default::default()
         };
         let (job, machine) = goal_to_job(&goal, &p).unwrap();
@@ -662,6 +700,13 @@ mod tests {
                 ..goal.clone()
             },
             "/nonexistent/waam.yaml",
+        );
+        bad(
+            SliceGoal {
+                stl_file: "/etc/passwd".into(),
+                ..goal.clone()
+            },
+            "stl_file: /etc/passwd: outside",
         );
         bad(
             SliceGoal {

@@ -231,6 +231,10 @@ pub use serialization::RepresentationIdentifier;
 pub use serialization::{
   CDRDeserializerAdapter, CDRSerializerAdapter, CdrDeserializer, CdrSerializer,
 };
+// cellsuite: caps on DATA_FRAG reassembly (vendor/README.md, patch 4)
+pub use rtps::fragment_assembler::{
+  fragment_reassembly_limits, set_fragment_reassembly_limits, FragmentReassemblyLimits,
+};
 /// Part of RTPS DATA submessage: 4-byte header + serialized data
 pub use messages::submessages::elements::serialized_payload::SerializedPayload;
 pub use structure::{

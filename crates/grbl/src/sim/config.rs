@@ -39,7 +39,8 @@ pub struct SimConfig {
     pub planner_blocks: usize,
     /// Axis letters, in report order (GRBL 1.1: `XYZ`; grblHAL-style `XYUV` etc. also work).
     pub axes: Vec<char>,
-    /// Rapid rate for every axis (mm/min).
+    /// Max rate of every axis (`$110`-`$112`, mm/min): rapids run at it, feed moves and jogs no
+    /// faster.
     pub rapid_mm_min: f64,
     /// Deceleration for feed holds and jog cancels (mm/s²).
     pub accel_mm_s2: f64,

@@ -1,8 +1,9 @@
 //! Motion in simulated time: the head block runs at the commanded feed (times the feed
-//! override; jogs without it) or the rapid rate (times the rapid override), with instant
-//! acceleration, except for a feed hold or jog cancel, which decelerates at the configured
-//! acceleration a: from speed v₀ at t₀ the speed is max(v₀ − a(t − t₀), 0), and a block with r
-//! mm left ends after 2r / (v + √(v² − 2ar)) if v² ≥ 2ar, else the hold completes after v/a.
+//! override; jogs without it) up to the max rate, or the rapid rate (times the rapid
+//! override), with instant acceleration, except for a feed hold or jog cancel, which
+//! decelerates at the configured acceleration a: from speed v₀ at t₀ the speed is
+//! max(v₀ − a(t − t₀), 0), and a block with r mm left ends after 2r / (v + √(v² − 2ar)) if
+//! v² ≥ 2ar, else the hold completes after v/a.
 
 use crate::protocol::MachineState;
 
@@ -12,16 +13,21 @@ use super::planner::{Block, Entry};
 use super::SimEvent;
 
 impl Machine {
-    /// Current speed of the head block (mm/s), before any hold deceleration.
+    /// Current speed of the head block (mm/s), before any hold deceleration. A feed move (after
+    /// the feed override; a jog without it) runs no faster than the axes' max rate, as GRBL 1.1's
+    /// `plan_compute_profile_nominal_speed` clamps it to the block's `rapid_rate` (from
+    /// `$110`-`$112`; here one rate along the path, as for rapids).
     pub(super) fn block_speed(&self, b: &Block) -> f64 {
+        let max_rate = self.cfg.rapid_mm_min / 60.0;
         match b.speed {
-            Speed::Rapid => self.cfg.rapid_mm_min / 60.0 * self.overrides.rapid as f64 / 100.0,
+            Speed::Rapid => max_rate * self.overrides.rapid as f64 / 100.0,
             Speed::Feed(v) => {
-                if b.jog {
+                let v = if b.jog {
                     v
                 } else {
                     v * self.overrides.feed as f64 / 100.0
-                }
+                };
+                v.min(max_rate)
             }
         }
     }
@@ -72,13 +78,21 @@ impl Machine {
 
     /// Moves the machine from `self.t` to `t` (no event lies strictly between them).
     pub(super) fn integrate(&mut self, t: f64) {
+        let t = t.max(self.t);
         let dt = t - self.t;
-        if dt <= 0.0 {
+        // The head block (or hold) whose end falls due by `t` ends at `t`, even if rounding
+        // leaves it a sliver of path, or its duration is below the resolution of `t` (an
+        // enormous rate): else the event loop would wait for an event that never comes.
+        let due = self.motion_event().is_some_and(|e| e <= t);
+        if dt <= 0.0 && !due {
             return;
         }
         if self.moving() {
             let (v, decel) = self.speed_at(self.t);
             let a = self.cfg.accel_mm_s2;
+            // Due while decelerating: the block ends first if it can within the stop, else the
+            // hold completes.
+            let block_due = due && !(decel && v * v < 2.0 * a * self.head_remaining_mm());
             let dist = if decel {
                 let dt_eff = dt.min(v / a);
                 v * dt_eff - 0.5 * a * dt_eff * dt_eff
@@ -88,7 +102,7 @@ impl Machine {
             let mut done = false;
             if let Some(Entry::Motion(b)) = self.queue.front_mut() {
                 b.remaining_mm -= dist;
-                if b.remaining_mm <= 1e-9 {
+                if b.remaining_mm <= 1e-9 || block_due {
                     b.remaining_mm = 0.0;
                     done = true;
                 }
@@ -113,13 +127,21 @@ impl Machine {
                 // of moves first (GRBL's cycle stop in a hold: `Hold:0` with nothing queued).
                 let out_of_moves = !self.queue.iter().any(|e| matches!(e, Entry::Motion(_)));
                 if let Some((t0, v0)) = self.hold {
-                    if t >= t0 + v0 / a - 1e-12 || out_of_moves {
+                    if t >= t0 + v0 / a - 1e-12 || out_of_moves || (due && !block_due) {
                         self.hold_stopped();
                     }
                 }
             }
         } else {
             self.t = t;
+        }
+    }
+
+    /// Path left in the head block (mm; 0 without one).
+    fn head_remaining_mm(&self) -> f64 {
+        match self.queue.front() {
+            Some(Entry::Motion(b)) => b.remaining_mm,
+            _ => 0.0,
         }
     }
 

@@ -38,6 +38,16 @@ pub enum JobParameter {
     TwistPivotChordFraction,
     /// `offset_mm`: the wire offset (given, or from the kerf model).
     OffsetMm,
+    /// `path_points`: the baseline path resolution.
+    PathPoints,
+    /// `particles`: PSO particles.
+    Particles,
+    /// `iterations`: PSO iterations.
+    Iterations,
+    /// `control_points`: spline control values of the path or the feed.
+    ControlPoints,
+    /// `refine_iterations`: Levenberg–Marquardt iterations after the swarm.
+    RefineIterations,
 }
 
 impl JobParameter {
@@ -57,6 +67,11 @@ impl JobParameter {
             Self::TipSweepMm => "tip_sweep_mm",
             Self::TwistPivotChordFraction => "twist_pivot_chord_fraction",
             Self::OffsetMm => "offset_mm",
+            Self::PathPoints => "path_points",
+            Self::Particles => "particles",
+            Self::Iterations => "iterations",
+            Self::ControlPoints => "control_points",
+            Self::RefineIterations => "refine_iterations",
         }
     }
 }

@@ -42,7 +42,11 @@ pub use picture::{exposure_svg, PanelProfiles};
 pub use process::FALLBACK_OFFSET_MM;
 pub use run::{lead_in_start, plan, plan_observed, surface_points};
 pub use source::{AirfoilSource, EMBEDDED_AIRFOILS};
-pub use spec::{validate, HotwireJob, TipRequest, TipSection, DEFAULT_MACHINE};
+pub use spec::{
+    validate, HotwireJob, TipRequest, TipSection, DEFAULT_MACHINE, MAX_CONTROL_POINTS,
+    MAX_EXPOSURE_WORK, MAX_ITERATIONS, MAX_PANELS, MAX_PARTICLES, MAX_PATH_POINTS,
+    MAX_REFINE_ITERATIONS,
+};
 pub use views::{FRAME_ID, SECTION_FRAME_ID, TIP_FRAME_ID};
 
 #[cfg(test)]

@@ -142,6 +142,32 @@ impl Default for HotwireJob {
     }
 }
 
+/// Most surface panels N (issue 23: every size has a limit). The default is 100 and the paper's
+/// plots use ~100–200; the limit is 10× the largest.
+pub const MAX_PANELS: usize = 2_000;
+
+/// Most baseline path points (default 1.5 × panels): 1.5 × [`MAX_PANELS`].
+pub const MAX_PATH_POINTS: usize = 3_000;
+
+/// Most PSO particles: the paper's swarm has 20; 50× that.
+pub const MAX_PARTICLES: usize = 1_000;
+
+/// Most PSO iterations: the paper runs 8 000; ~12× that.
+pub const MAX_ITERATIONS: usize = 100_000;
+
+/// Most spline control values of the path or the feed: defaults 32 and 16; ~30× that (a
+/// value per few panels at [`MAX_PANELS`]).
+pub const MAX_CONTROL_POINTS: usize = 1_000;
+
+/// Most Levenberg–Marquardt iterations: the default is 60; it stops on its tolerance long
+/// before.
+pub const MAX_REFINE_ITERATIONS: usize = 1_000;
+
+/// Most exposure kernel evaluations the swarm may make, particles × iterations × panels × path
+/// points (issue 23: each cap alone still multiplies to days). The defaults make 2.4·10⁹
+/// (20 × 8 000 × 100 × 150, under a minute); the limit is ~10× that.
+pub const MAX_EXPOSURE_WORK: f64 = 2.5e10;
+
 /// Checks a job's scalar parameters (cheap; [`plan`](super::plan) does it too).
 ///
 /// # Errors
@@ -183,6 +209,69 @@ pub fn validate(job: &HotwireJob) -> Result<(), JobError> {
             parameter: JobParameter::Panels,
             value: job.panels as f64,
             requirement: "at least 5",
+        });
+    }
+    let at_most = |parameter, value: usize, max: usize, requirement: &'static str| {
+        if value <= max {
+            Ok(())
+        } else {
+            Err(JobError::InvalidParameter {
+                parameter,
+                value: value as f64,
+                requirement,
+            })
+        }
+    };
+    at_most(
+        JobParameter::Panels,
+        job.panels,
+        MAX_PANELS,
+        "at most 2000 (MAX_PANELS)",
+    )?;
+    at_most(
+        JobParameter::PathPoints,
+        job.path_points,
+        MAX_PATH_POINTS,
+        "at most 3000 (MAX_PATH_POINTS)",
+    )?;
+    at_most(
+        JobParameter::Particles,
+        job.pso.particles,
+        MAX_PARTICLES,
+        "at most 1000 (MAX_PARTICLES)",
+    )?;
+    at_most(
+        JobParameter::Iterations,
+        job.pso.iterations,
+        MAX_ITERATIONS,
+        "at most 100000 (MAX_ITERATIONS)",
+    )?;
+    let feed_controls = job.objective.feed.as_ref().map_or(0, |f| f.control_points);
+    at_most(
+        JobParameter::ControlPoints,
+        job.objective.control_points.max(feed_controls),
+        MAX_CONTROL_POINTS,
+        "at most 1000 (MAX_CONTROL_POINTS)",
+    )?;
+    at_most(
+        JobParameter::RefineIterations,
+        job.refine.iterations,
+        MAX_REFINE_ITERATIONS,
+        "at most 1000 (MAX_REFINE_ITERATIONS)",
+    )?;
+    let path_points = if job.path_points == 0 {
+        job.panels + job.panels / 2
+    } else {
+        job.path_points
+    };
+    let work =
+        job.pso.particles as f64 * job.pso.iterations as f64 * (job.panels * path_points) as f64;
+    if work > MAX_EXPOSURE_WORK {
+        return Err(JobError::InvalidParameter {
+            parameter: JobParameter::Iterations,
+            value: job.pso.iterations as f64,
+            requirement: "such that particles × iterations × panels × path points ≤ 2.5e10 \
+                          (MAX_EXPOSURE_WORK)",
         });
     }
     if let Some(c) = job.cse {

@@ -562,3 +562,67 @@ fn errors_name_the_parameter_or_airfoil() {
     .unwrap_err();
     assert!(matches!(e, JobError::Cancelled { iteration: 2 }), "{e}");
 }
+
+#[test]
+fn every_size_is_capped_at_its_limit() {
+    let base = HotwireJob {
+        pso: PsoConfig {
+            particles: 1,
+            iterations: 1,
+            ..PsoConfig::default()
+        },
+        ..HotwireJob::default()
+    };
+    type Set = fn(&mut HotwireJob, usize);
+    let cases: [(JobParameter, usize, Set); 6] = [
+        (JobParameter::Panels, MAX_PANELS, |j, n| j.panels = n),
+        (JobParameter::PathPoints, MAX_PATH_POINTS, |j, n| {
+            j.path_points = n
+        }),
+        (JobParameter::Particles, MAX_PARTICLES, |j, n| {
+            j.pso.particles = n
+        }),
+        (JobParameter::Iterations, MAX_ITERATIONS, |j, n| {
+            j.pso.iterations = n
+        }),
+        (JobParameter::ControlPoints, MAX_CONTROL_POINTS, |j, n| {
+            j.objective.control_points = n
+        }),
+        (
+            JobParameter::RefineIterations,
+            MAX_REFINE_ITERATIONS,
+            |j, n| j.refine.iterations = n,
+        ),
+    ];
+    for (parameter, max, set) in cases {
+        let mut job = base.clone();
+        set(&mut job, max);
+        assert!(validate(&job).is_ok(), "{parameter} = {max}");
+        set(&mut job, max + 1);
+        let e = validate(&job).unwrap_err();
+        assert!(
+            matches!(e, JobError::InvalidParameter { parameter: p, .. } if p == parameter),
+            "{e}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{parameter} = {} is invalid: must be at most {max} (MAX_{})",
+                max + 1,
+                parameter.name().to_uppercase()
+            )
+        );
+    }
+    // The swarm's work: 20 particles × 100 panels × 150 path points per iteration.
+    let mut job = HotwireJob::default();
+    let per_iteration = 20.0 * 100.0 * 150.0;
+    job.pso.iterations = (MAX_EXPOSURE_WORK / per_iteration).floor() as usize;
+    assert!(validate(&job).is_ok());
+    job.pso.iterations += 1;
+    let e = validate(&job).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "iterations = 83334 is invalid: must be such that particles × iterations × panels × \
+         path points ≤ 2.5e10 (MAX_EXPOSURE_WORK)"
+    );
+}

@@ -79,7 +79,10 @@ use crate::plan::{Cut, CutPlan};
 use crate::problem::ContourId;
 use crate::thermal::SequencerParamError;
 
-pub use params::ImproveParams;
+pub use params::{
+    ImproveParams, MAX_IMPROVE_ITERATIONS, MAX_LNS_REMOVE, MAX_LOCAL_SWEEPS, MAX_OR_OPT_LEN,
+    MAX_WINDOW,
+};
 
 /// Progress report for the action feedback (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]

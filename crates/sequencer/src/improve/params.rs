@@ -4,6 +4,20 @@ use serde::{Deserialize, Serialize};
 
 use crate::thermal::{require, SequencerParamError};
 
+// Limits of the knobs (issue 23: a goal's or a parameter file's number must not buy an hour
+// of CPU or an overflow); each is far above what helps (benches README).
+
+/// Most LNS iterations: 100× the default; each costs up to a few ms on a 500-part sheet.
+pub const MAX_IMPROVE_ITERATIONS: usize = 100_000;
+/// Farthest reach of local moves, positions: 40× the default (a sweep is O(n · window)).
+pub const MAX_WINDOW: usize = 1_000;
+/// Longest Or-opt run: a sweep is O(n · or_opt_max_len · window); the default is 3.
+pub const MAX_OR_OPT_LEN: usize = 50;
+/// Most local-search sweeps per round: 25× the default 4.
+pub const MAX_LOCAL_SWEEPS: usize = 100;
+/// Most cuts removed per LNS iteration (reinsertion is O(lns_remove · n)): 125× the default 8.
+pub const MAX_LNS_REMOVE: usize = 1_000;
+
 /// Knobs of the improvement phase (module docs). Defaults are ours.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -71,12 +85,35 @@ impl ImproveParams {
     /// The first field out of range, by name.
     pub fn validate(&self) -> Result<(), SequencerParamError> {
         require(
-            self.or_opt_max_len >= 1,
+            self.max_iterations <= MAX_IMPROVE_ITERATIONS,
+            "max_iterations",
+            self.max_iterations,
+            "must be in [0, 100000] (MAX_IMPROVE_ITERATIONS)",
+        )?;
+        require(
+            (1..=MAX_OR_OPT_LEN).contains(&self.or_opt_max_len),
             "or_opt_max_len",
             self.or_opt_max_len,
-            "must be ≥ 1",
+            "must be in [1, 50] (MAX_OR_OPT_LEN)",
         )?;
-        require(self.window >= 1, "window", self.window, "must be ≥ 1")?;
+        require(
+            (1..=MAX_WINDOW).contains(&self.window),
+            "window",
+            self.window,
+            "must be in [1, 1000] (MAX_WINDOW)",
+        )?;
+        require(
+            self.local_sweeps <= MAX_LOCAL_SWEEPS,
+            "local_sweeps",
+            self.local_sweeps,
+            "must be in [0, 100] (MAX_LOCAL_SWEEPS)",
+        )?;
+        require(
+            self.lns_remove <= MAX_LNS_REMOVE,
+            "lns_remove",
+            self.lns_remove,
+            "must be in [0, 1000] (MAX_LNS_REMOVE)",
+        )?;
         require(
             self.proxy_radius_mm.is_finite() && self.proxy_radius_mm > 0.0,
             "proxy_radius_mm",

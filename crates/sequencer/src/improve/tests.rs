@@ -146,6 +146,49 @@ fn bad_params_name_the_field() {
     assert!(e.contains("window"), "{e}");
 }
 
+#[test]
+fn knobs_are_capped() {
+    type Set = fn(&mut ImproveParams, usize);
+    let knobs: [(&str, usize, &str, Set); 5] = [
+        (
+            "max_iterations",
+            MAX_IMPROVE_ITERATIONS,
+            "MAX_IMPROVE_ITERATIONS",
+            |p, v| p.max_iterations = v,
+        ),
+        ("window", MAX_WINDOW, "MAX_WINDOW", |p, v| p.window = v),
+        (
+            "or_opt_max_len",
+            MAX_OR_OPT_LEN,
+            "MAX_OR_OPT_LEN",
+            |p, v| p.or_opt_max_len = v,
+        ),
+        (
+            "local_sweeps",
+            MAX_LOCAL_SWEEPS,
+            "MAX_LOCAL_SWEEPS",
+            |p, v| p.local_sweeps = v,
+        ),
+        ("lns_remove", MAX_LNS_REMOVE, "MAX_LNS_REMOVE", |p, v| {
+            p.lns_remove = v
+        }),
+    ];
+    for (field, limit, constant, set) in knobs {
+        let mut p = ImproveParams::default();
+        set(&mut p, limit);
+        assert_eq!(p.validate(), Ok(()), "{field} at {limit}");
+        for over in [limit + 1, usize::MAX] {
+            set(&mut p, over);
+            let e = p.validate().unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!("parameter `{field}` = {over}: must be in ["))
+                    && e.ends_with(&format!(", {limit}] ({constant})")),
+                "{e}"
+            );
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 

@@ -39,7 +39,7 @@ mod path;
 mod sim;
 
 pub(crate) use params::require;
-pub use params::{SequencerParamError, ThermalParams};
+pub use params::{SequencerParamError, ThermalParams, MAX_CUT_STEPS, MAX_RASTER_CELLS};
 pub use path::cut_path;
 pub(crate) use path::point_along;
 pub use sim::{CutThermal, Frame, FrameObserver, ThermalOutcome, ThermalSim};

@@ -3,6 +3,18 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Most cells the thermal raster may have (issue 23: `cell_mm` or a layout's `sheet` set its
+/// size). The raster keeps ~17 bytes a cell (temperature and its next step, conductivity,
+/// metal fraction, kerf flags), so 1.7 GB at the limit; a 3 × 1.5 m sheet is 2.8·10⁵ cells
+/// at the default 4 mm and 1.8·10⁷ at 0.5 mm, a 12 × 3 m plate 3.6·10⁷ at 1 mm.
+pub const MAX_RASTER_CELLS: usize = 100_000_000;
+
+/// Most raster steps cutting the contours may take: their perimeters over `cell_mm` (issue
+/// 23: a comb of 20 000 points across a 10 m sheet is 2·10⁷ steps, 10⁶ points 10⁹). A step is
+/// ~30 µs of raster work (benches README), so the limit is ~5 minutes per raster run; a
+/// 12 × 3 m plate's 3 km of cut at 0.5 mm is 6·10⁶, the 1002-contour benchmark ~3·10⁴.
+pub const MAX_CUT_STEPS: usize = 10_000_000;
+
 /// All constants of the thermal raster (seed 003 §A3). The paper gives no numbers (notes
 /// §A0); the defaults are **ours**, for plasma cutting of ~6 mm mild steel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -79,6 +91,34 @@ pub enum SequencerParamError {
         value: String,
         /// What it must be.
         reason: &'static str,
+    },
+    /// The sheet's raster at `cell_mm` is over [`MAX_RASTER_CELLS`].
+    #[error(
+        "sheet {w} × {h} mm at cell_mm = {cell_mm} mm is a raster of {cells:.3e} cells: the \
+         limit is {MAX_RASTER_CELLS} cells (MAX_RASTER_CELLS)",
+        w = .sheet[0],
+        h = .sheet[1]
+    )]
+    RasterTooLarge {
+        /// Sheet size, mm.
+        sheet: [f64; 2],
+        /// Raster cell size, mm.
+        cell_mm: f64,
+        /// Cells it would take.
+        cells: f64,
+    },
+    /// Cutting the contours would take more than [`MAX_CUT_STEPS`] raster steps.
+    #[error(
+        "the contours' cut length of {cut_mm:.0} mm at cell_mm = {cell_mm} mm is {steps:.3e} \
+         raster steps: the limit is {MAX_CUT_STEPS} steps (MAX_CUT_STEPS)"
+    )]
+    CutTooLong {
+        /// Total perimeter of the contours, mm.
+        cut_mm: f64,
+        /// Raster cell size, mm.
+        cell_mm: f64,
+        /// Steps it would take.
+        steps: f64,
     },
 }
 
@@ -193,6 +233,50 @@ impl ThermalParams {
             self.epsilon_c,
             "must be finite and ≥ 0",
         )?;
+        Ok(())
+    }
+
+    /// The raster `(width, height)`, cells, of a `sheet[0] × sheet[1]` mm sheet
+    /// (`⌈size / cell_mm⌉`, at least 1). Call after [`ThermalParams::validate`].
+    ///
+    /// # Errors
+    /// A sheet size that is not finite and positive (field `sheet`), or a raster over
+    /// [`MAX_RASTER_CELLS`] ([`SequencerParamError::RasterTooLarge`]).
+    pub fn raster_size(&self, sheet: [f64; 2]) -> Result<(usize, usize), SequencerParamError> {
+        require(
+            sheet.iter().all(|v| v.is_finite() && *v > 0.0),
+            "sheet",
+            format!("{sheet:?}"),
+            "must be finite and > 0",
+        )?;
+        let width = (sheet[0] / self.cell_mm).ceil().max(1.0);
+        let height = (sheet[1] / self.cell_mm).ceil().max(1.0);
+        let cells = width * height;
+        // Compared as f64: a 10¹² mm sheet's cells overflow no integer here.
+        if cells > MAX_RASTER_CELLS as f64 {
+            return Err(SequencerParamError::RasterTooLarge {
+                sheet,
+                cell_mm: self.cell_mm,
+                cells,
+            });
+        }
+        Ok((width as usize, height as usize))
+    }
+
+    /// Checks that cutting `cut_mm` of contours, one raster step per `cell_mm`, stays within
+    /// [`MAX_CUT_STEPS`]. Call after [`ThermalParams::validate`].
+    ///
+    /// # Errors
+    /// [`SequencerParamError::CutTooLong`].
+    pub fn check_cut_steps(&self, cut_mm: f64) -> Result<(), SequencerParamError> {
+        let steps = (cut_mm / self.cell_mm).ceil();
+        if steps > MAX_CUT_STEPS as f64 || steps.is_nan() {
+            return Err(SequencerParamError::CutTooLong {
+                cut_mm,
+                cell_mm: self.cell_mm,
+                steps,
+            });
+        }
         Ok(())
     }
 

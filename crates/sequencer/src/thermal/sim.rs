@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::problem::{distance, Contour, Point};
 
 use super::kernel::{edge_bits, BLOCK, TH, TW};
-use super::params::{require, SequencerParamError, ThermalParams};
+use super::params::{SequencerParamError, ThermalParams};
 use super::path::{cut_path, point_along};
 
 /// One frame of the raster (for the `HeatMap` stream), seed 003 §A3.
@@ -119,27 +119,14 @@ impl<'a> ThermalSim<'a> {
     ///
     /// # Errors
     /// An invalid parameter, or a sheet size that is not finite and positive (field
-    /// `sheet`), or a raster over 10⁸ cells (field `cell_mm`).
+    /// `sheet`), or a raster over [`super::MAX_RASTER_CELLS`] ([`ThermalParams::raster_size`]).
     pub fn new(
         sheet: [f64; 2],
         start: Point,
         params: &ThermalParams,
     ) -> Result<Self, SequencerParamError> {
         params.validate()?;
-        require(
-            sheet.iter().all(|v| v.is_finite() && *v > 0.0),
-            "sheet",
-            format!("{sheet:?}"),
-            "must be finite and > 0",
-        )?;
-        let width = (sheet[0] / params.cell_mm).ceil().max(1.0) as usize;
-        let height = (sheet[1] / params.cell_mm).ceil().max(1.0) as usize;
-        require(
-            (width as f64) * (height as f64) <= 1e8,
-            "cell_mm",
-            params.cell_mm,
-            "gives a raster over 10^8 cells for this sheet",
-        )?;
+        let (width, height) = params.raster_size(sheet)?;
         let n = width * height;
         let tiles_x = width.div_ceil(TW);
         let tiles_y = height.div_ceil(TH);

@@ -33,6 +33,43 @@ fn bad_params_name_the_field() {
     assert!(ThermalSim::new([0.0, 1.0], [0.0, 0.0], &ThermalParams::default()).is_err());
 }
 
+#[test]
+fn the_raster_is_capped() {
+    let p = ThermalParams {
+        cell_mm: 1.0,
+        ..Default::default()
+    };
+    // 10 000 × 10 000 cells is the limit; one more row is over it.
+    assert_eq!(p.raster_size([1e4, 1e4]), Ok((10_000, 10_000)));
+    assert_eq!(10_000 * 10_000, MAX_RASTER_CELLS);
+    let e = p.raster_size([1e4, 1e4 + 0.5]).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "sheet 10000 × 10000.5 mm at cell_mm = 1 mm is a raster of 1.000e8 cells: the limit \
+         is 100000000 cells (MAX_RASTER_CELLS)"
+    );
+    // A sheet of 10¹² mm at the default 4 mm: 6·10²² cells, refused without overflow.
+    let e = ThermalParams::default()
+        .raster_size([1e12, 1e12])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("a raster of 6.250e22 cells"), "{e}");
+    assert!(ThermalSim::new([1e12, 1e12], [0.0, 0.0], &ThermalParams::default()).is_err());
+}
+
+#[test]
+fn the_cut_steps_are_capped() {
+    let p = ThermalParams::default();
+    let at = p.cell_mm * MAX_CUT_STEPS as f64;
+    assert_eq!(p.check_cut_steps(at), Ok(()));
+    let e = p.check_cut_steps(at + 1.0).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "the contours' cut length of 40000001 mm at cell_mm = 4 mm is 1.000e7 raster steps: \
+         the limit is 10000000 steps (MAX_CUT_STEPS)"
+    );
+}
+
 /// A lone hot cell among ambient neighbours gives each `ΔT = P.T·K_c` (seed 003 §A3).
 #[test]
 fn spread_matches_the_paper_for_a_hot_cell() {

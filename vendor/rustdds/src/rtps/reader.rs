@@ -642,6 +642,15 @@ impl Reader {
     let completed_dds_data = self
       .fragment_assembler_mutable(writer_guid, datafrag.fragment_size)
       .new_datafrag(datafrag, datafrag_flags);
+    // cellsuite: keep no assembler for a writer with nothing being reassembled, so
+    // DATA_FRAGs dropped from ever new (forged) writers leave nothing behind.
+    if self
+      .fragment_assemblers
+      .get(&writer_guid)
+      .is_some_and(FragmentAssembler::is_empty)
+    {
+      self.fragment_assemblers.remove(&writer_guid);
+    }
 
     // ... and continue processing, if data was completed.
     if let Some(dds_data) = completed_dds_data {
@@ -689,6 +698,7 @@ impl Reader {
           debug!("AssemblyBuffer GC writer {writer:?}");
           fa.garbage_collect_before(expire_before);
         });
+      self.fragment_assemblers.retain(|_, fa| !fa.is_empty()); // cellsuite: as above
     } else {
       trace!("Not yet AssemblyBuffer GC time.");
     }

@@ -582,10 +582,22 @@ impl Writer {
   // send, or the writer-wide minimum over all matched readers for a
   // multicast-to-all send (one datagram shared by every reader).
   fn datagram_budget(&self, target_reader_opt: Option<&RtpsReaderProxy>) -> usize {
-    match target_reader_opt {
+    let budget = match target_reader_opt {
       Some(reader) => reader.max_datagram_payload(),
       None => self.min_datagram_payload,
-    }
+    };
+    // cellsuite: DDS Security wraps what is packed here three times (payload, submessage,
+    // message: crypto header, lengths, padding, common MAC; plus one receiver-specific MAC per
+    // reader and level with origin authentication). Without this room a packed DATA_FRAG grew
+    // past the 65 507-byte UDP limit on loopback and was never sent (see vendor/README.md).
+    #[cfg(feature = "security")]
+    let budget = if self.security_plugins.is_some() {
+      let receivers = target_reader_opt.map_or(self.readers.len(), |_| 1);
+      budget.saturating_sub(SECURITY_WRAPPING_RESERVE + 3 * RECEIVER_MAC_SIZE * receivers) // cellsuite
+    } else {
+      budget // cellsuite
+    };
+    budget // cellsuite
   }
 
   /// Largest serialized payload that fits in one unfragmented DATA submessage
@@ -2266,6 +2278,14 @@ fn repair_interval_for(deadline: Option<Duration>) -> std::time::Duration {
     _ => REPAIR_INTERVAL_DEFAULT,
   }
 }
+
+// cellsuite: an upper bound of what the builtin AES-GCM transform adds to one datagram
+// without origin authentication (about 186 bytes: 44 for the payload, 59 for the submessage,
+// 83 for the message), and the size of one receiver-specific MAC (key id and MAC).
+#[cfg(feature = "security")]
+const SECURITY_WRAPPING_RESERVE: usize = 256; // cellsuite
+#[cfg(feature = "security")]
+const RECEIVER_MAC_SIZE: usize = 20; // cellsuite
 
 // Adaptive packing: how many contiguous fragments (starting at 1-based `start`)
 // to place in a single DATAFRAG submessage so the datagram stays within

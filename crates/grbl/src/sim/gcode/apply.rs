@@ -169,15 +169,15 @@ fn values(
     jog: bool,
 ) -> Result<f64, u8> {
     let v = |c: char| words.value(c);
-    if let Some(n) = v('N') {
-        if !(0.0..=9_999_999.0).contains(&n) {
-            return Err(INVALID_LINE_NUMBER);
-        }
-    }
-    for c in ['F', 'P', 'S', 'T'] {
+    // GRBL 1.1 gcode.c, step 2: "Check for invalid negative values for words F, N, P, T, and
+    // S" (`STATUS_NEGATIVE_VALUE`, error:4) as each word is read, before any other check.
+    for c in ['F', 'N', 'P', 'S', 'T'] {
         if v(c).is_some_and(|x| x < 0.0) {
             return Err(NEGATIVE_VALUE);
         }
+    }
+    if v('N').is_some_and(|n| n > 9_999_999.0) {
+        return Err(INVALID_LINE_NUMBER);
     }
     if let Some(t) = v('T') {
         if t > 255.0 {
@@ -226,22 +226,29 @@ fn non_modal_command(
             action.sync = true;
         }
         NonModal::SetCoord => {
-            let (l, p) = (
-                line.value('L').ok_or(VALUE_WORD_MISSING)?,
-                line.value('P').ok_or(VALUE_WORD_MISSING)?,
-            );
-            line.use_word('L');
-            line.use_word('P');
-            if l.fract() != 0.0 || p.fract() != 0.0 {
-                return Err(COMMAND_VALUE_NOT_INTEGER);
-            }
-            if !(l == 2.0 || l == 20.0) || p > 6.0 {
-                return Err(UNSUPPORTED_COMMAND);
-            }
+            // GRBL 1.1 gcode.c, "[19. Remaining non-modal actions]", NON_MODAL_SET_COORDINATE_DATA:
+            // no axis words → 26; P or L missing → 28; `coord_select = trunc(p)` above
+            // N_COORDINATE_SYSTEM (6) → STATUS_GCODE_UNSUPPORTED_COORD_SYS, 29; L (read as its
+            // integer part) neither 2 nor 20 → 20. P below 0 never gets here (error:4 in
+            // `values`), so P0..=P6 index G54..G59 or, P0, the active system.
             if !has_axis {
                 return Err(NO_AXIS_WORDS);
             }
-            let idx = if p == 0.0 { new.coord } else { p as usize - 1 };
+            let (l, p) = (
+                line.value('L').ok_or(VALUE_WORD_MISSING)?.trunc(),
+                line.value('P').ok_or(VALUE_WORD_MISSING)?.trunc(),
+            );
+            line.use_word('L');
+            line.use_word('P');
+            let coord = match p {
+                0.0 => new.coord,
+                1.0..=6.0 => p as usize - 1,
+                _ => return Err(UNSUPPORTED_COORD_SYS),
+            };
+            if !(l == 2.0 || l == 20.0) {
+                return Err(UNSUPPORTED_COMMAND);
+            }
+            let idx = coord;
             for (k, w) in line.axis_words.iter().enumerate() {
                 if let Some(x) = *w {
                     let mm = x * unit;

@@ -53,7 +53,14 @@ pub(super) fn lex(line: &str, axes: &[char]) -> Result<Words, u8> {
         if digits == 0 {
             return Err(BAD_NUMBER_FORMAT);
         }
-        let value: f64 = line[start..i].parse().map_err(|_| BAD_NUMBER_FORMAT)?;
+        // GRBL, grblHAL and FluidNC hold a word in a 32-bit float (GRBL's `read_float`); past
+        // its range (3.4e38) the firmware would go on with infinity, and so would our lengths
+        // and times (NaN positions). The simulator answers error:2 (bad number) instead.
+        let value: f64 = line[start..i]
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.abs() <= f64::from(f32::MAX))
+            .ok_or(BAD_NUMBER_FORMAT)?;
         match letter {
             b'G' | b'M' => {
                 let int = value.trunc();

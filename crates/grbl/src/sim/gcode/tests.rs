@@ -90,3 +90,37 @@ fn jog_rules() {
     assert_eq!(execute(&m, "G91X10", &XYZ, true).unwrap_err(), 22);
     assert_eq!(execute(&m, "G0X10F10", &XYZ, true).unwrap_err(), 16);
 }
+
+#[test]
+fn g10_and_negative_words_answer_as_grbl_does() {
+    let m = Modal::new(3, vec![0.0; 3]);
+    // GRBL 1.1 gcode.c: negative F, N, P, S, T are error:4 when read.
+    for line in [
+        "G10L2P-1",
+        "G10L2P-1X1",
+        "N-1G0X1",
+        "G4P-0.1",
+        "S-2M3",
+        "T-1",
+    ] {
+        assert_eq!(run(&m, line).unwrap_err(), 4, "{line}");
+    }
+    // G10: no axis words 26, P or L missing 28, trunc(P) > 6 29, L not 2/20 20.
+    assert_eq!(run(&m, "G10L2P1").unwrap_err(), 26);
+    assert_eq!(run(&m, "G10P1X1").unwrap_err(), 28);
+    assert_eq!(run(&m, "G10L2P7X1").unwrap_err(), 29);
+    assert_eq!(run(&m, "G10L2P1000000000000X1").unwrap_err(), 29);
+    assert_eq!(run(&m, "G10L3P1X1").unwrap_err(), 20);
+    assert_eq!(run(&m, "G10L-2P1X1").unwrap_err(), 20);
+    // P is truncated, as GRBL does: P6.9 is G59, P0.5 the active system.
+    let (m6, _) = run(&m, "G10L2P6.9X7").unwrap();
+    assert_eq!(m6.offsets[5][0], 7.0);
+    let (m0, _) = run(&m, "G10L2P0.5X3").unwrap();
+    assert_eq!(m0.offsets[m.coord][0], 3.0);
+    // A number beyond the firmware's 32-bit float is a bad number, not infinity.
+    for digits in [39, 400] {
+        let huge = format!("G0X{}", "9".repeat(digits));
+        assert_eq!(run(&m, &huge).unwrap_err(), 2, "{digits} digits");
+    }
+    assert!(run(&m, &format!("G0X{}", "9".repeat(38))).is_ok());
+}
