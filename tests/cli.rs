@@ -23,6 +23,29 @@ fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
+/// The lines of a failed launch that say what went wrong, for the end of a failure message
+/// (CI shows a long message's head and tail): the job runner's last lines, then every warning
+/// and error from any node.
+fn launch_diagnosis(stderr: &str) -> String {
+    let last = |lines: Vec<&str>, n: usize| lines[lines.len().saturating_sub(n)..].join("\n");
+    let runner: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("[job_runner]"))
+        .collect();
+    let trouble: Vec<&str> = stderr
+        .lines()
+        .filter(|l| {
+            (l.contains(" WARN ") || l.contains(" ERROR ") || l.contains("error:"))
+                && !l.contains("rustdds")
+        })
+        .collect();
+    format!(
+        "\n--- job_runner, last lines ---\n{}\n--- warnings and errors (rustdds left out) ---\n{}",
+        last(runner, 25),
+        last(trouble, 40)
+    )
+}
+
 /// Asserts a usage failure: exit 64, an `error:` line containing every `needle`, no panic.
 fn assert_clear_error(out: &Output, needles: &[&str]) {
     let stderr = text(&out.stderr);
@@ -109,13 +132,16 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
             "--out",
             out_dir.path().to_str().unwrap(),
             "iterations:=60",
+            // A stage that hangs fails the test in minutes, not the default quarter hour.
+            "job_timeout:=240",
         ],
         common::fresh_domain(),
     );
     let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
     assert!(
         out.status.success(),
-        "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}"
+        "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}{}",
+        launch_diagnosis(&stderr)
     );
     // 60 iterations for each of the panel's two sections, root and tip.
     assert!(stdout.contains("| plan    | 120 iterations"), "{stdout}");

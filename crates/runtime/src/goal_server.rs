@@ -19,9 +19,11 @@
 //! Goals run one at a time, in arrival order (a goal sent meanwhile waits for the running one
 //! to end before it is read), unless [`ServeOptions::concurrent`] is set. Cancel requests are
 //! answered at any time: accepted for running goals, refused for anything else (a goal not yet
-//! run, or one that ended). On shutdown no new goal is read; the running ones end as their
-//! handler decides (it may watch [`crate::Shutdown`]) and then [`serve`] returns (kept results
-//! go with it).
+//! run, or one that ended). On shutdown no new goal is read. One-at-a-time servers (computations)
+//! cancel the running goal and give it [`SHUTDOWN_GRACE`] to end before [`serve`] returns
+//! anyway, naming it, so a node never outlives its launcher's patience for one stuck goal;
+//! concurrent servers (the machine bridge) let their goals end as their handler decides (it may
+//! watch [`crate::Shutdown`]). Kept results go when [`serve`] returns.
 //!
 //! A handler whose work is a blocking computation runs it with [`GoalContext::run_blocking`];
 //! one whose work is async I/O (a machine run) awaits it in [`GoalHandler::run`] directly.
@@ -190,16 +192,25 @@ pub struct ServeOptions {
     pub result_timeout: Duration,
     /// Run goals side by side, each on its own task, instead of one at a time.
     pub concurrent: bool,
+    /// On shutdown, cancel the running goals and return after this long even if they have
+    /// not ended; `None`: wait for them however long they take.
+    pub cancel_on_shutdown: Option<Duration>,
 }
+
+/// How long a one-at-a-time server's goal has to end once shutdown cancels it: below the 5 s
+/// a launcher waits after SIGINT before it kills.
+pub const SHUTDOWN_GRACE: Duration = Duration::from_secs(3);
 
 impl ServeOptions {
     /// One goal at a time, in arrival order; results kept `result_timeout_s` seconds (a
-    /// negative or NaN value is 0, an infinite one forever).
+    /// negative or NaN value is 0, an infinite one forever); on shutdown the running goal is
+    /// canceled and given [`SHUTDOWN_GRACE`].
     pub fn one_at_a_time(result_timeout_s: f64) -> Self {
         Self {
             result_timeout: Duration::try_from_secs_f64(result_timeout_s.max(0.0))
                 .unwrap_or(Duration::MAX),
             concurrent: false,
+            cancel_on_shutdown: Some(SHUTDOWN_GRACE),
         }
     }
 
@@ -208,6 +219,7 @@ impl ServeOptions {
     pub fn concurrent(result_timeout_s: f64) -> Self {
         Self {
             concurrent: true,
+            cancel_on_shutdown: None,
             ..Self::one_at_a_time(result_timeout_s)
         }
     }
@@ -245,6 +257,8 @@ pub async fn serve<H: GoalHandler>(
     let mut kept: VecDeque<(Instant, GoalId, String)> = VecDeque::new();
     let mut served = 0u64;
     let mut stopping = false;
+    // When a shutdown stops waiting for canceled goals.
+    let mut give_up_at: Option<Instant> = None;
     loop {
         let idle = running.is_empty();
         if stopping && idle {
@@ -351,7 +365,25 @@ pub async fn serve<H: GoalHandler>(
                     tracing::warn!("{action}: nobody asked for the result of {job_id}");
                 }
             }
-            _ = node.shutdown().requested(), if !stopping => stopping = true,
+            _ = node.shutdown().requested(), if !stopping => {
+                stopping = true;
+                if let Some(grace) = options.cancel_on_shutdown {
+                    for goal in running.values() {
+                        tracing::info!("{action}: shutting down: cancelling {}", goal.job_id);
+                        goal.cancel.cancel();
+                    }
+                    give_up_at = Some(Instant::now() + grace);
+                }
+            }
+            _ = tokio::time::sleep_until(give_up_at.unwrap_or_else(Instant::now)), if give_up_at.is_some() => {
+                let left: Vec<&str> = running.values().map(|g| g.job_id.as_str()).collect();
+                tracing::warn!(
+                    "{action}: shutting down: {} still running {:?} after it was cancelled; leaving it",
+                    left.join(", "),
+                    options.cancel_on_shutdown.unwrap_or_default(),
+                );
+                return Ok(());
+            }
         }
     }
 }

@@ -53,6 +53,9 @@ pub const EXIT_USAGE: u8 = 64;
 /// (as `sysexits`' EX_DATAERR).
 pub const EXIT_DATA: u8 = 65;
 
+/// How long a node's exit waits for blocking work still running once its async tasks are gone.
+const BLOCKING_WORK_GRACE: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A node parameter value the node's body finds unusable after parsing (e.g. a machine profile
 /// name that does not resolve). [`run_node`] exits with [`EXIT_USAGE`] when the body's error is
 /// one. (Reading the parameters themselves fails with [`params::ParamsError`].)
@@ -125,8 +128,10 @@ where
             }
         }
     });
-    // The runtime drops the graph spinner; only then may the DDS participant go.
-    drop(runtime);
+    // The runtime drops the graph spinner; only then may the DDS participant go. A blocking
+    // computation still running (a goal that ignored its cancel) is left behind after a
+    // moment rather than holding the process past its launcher's patience.
+    runtime.shutdown_timeout(BLOCKING_WORK_GRACE);
     drop(participant);
     code
 }

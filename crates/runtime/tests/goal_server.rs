@@ -370,3 +370,92 @@ async fn every_result_request_is_answered_and_the_end_status_is_published_withou
     assert!(!serving.is_finished());
     serving.abort();
 }
+
+/// Sleeps `iterations` × 100 ms on a blocking thread and never looks at its cancel: a
+/// computation stuck where it cannot be asked to stop.
+struct Stubborn;
+
+impl GoalHandler for Stubborn {
+    type Goal = PlanHotwireGoal;
+    type Result = PlanHotwireResult;
+    type Feedback = PlanHotwireFeedback;
+    type Job = u64;
+
+    fn job_id(&self, goal: &PlanHotwireGoal, _served: u64) -> String {
+        goal.job_id.clone()
+    }
+
+    fn validate(&self, goal: &PlanHotwireGoal, _job_id: &str) -> Result<u64, String> {
+        Ok(u64::from(goal.iterations))
+    }
+
+    async fn run(
+        &self,
+        steps: u64,
+        ctx: GoalContext<PlanHotwireFeedback>,
+    ) -> anyhow::Result<GoalEnd<PlanHotwireResult>> {
+        ctx.feedback(PlanHotwireFeedback::default());
+        ctx.run_blocking(move |_| std::thread::sleep(Duration::from_millis(100 * steps)))
+            .await?;
+        Ok(GoalEnd::succeeded(PlanHotwireResult::default()))
+    }
+}
+
+/// Shuts a server of `handler` down while a goal of `iterations` runs; how long `serve` took to
+/// return.
+async fn shutdown_while_running<H: GoalHandler>(
+    domain: u16,
+    handler: H,
+    iterations: u32,
+) -> Duration {
+    let (server_node, shutdown) = node("computer", domain);
+    let (client_node, _) = node("operator", domain);
+    let serving = tokio::spawn(goal_server::serve(
+        server_node,
+        "/compute",
+        handler,
+        ServeOptions::one_at_a_time(60.0),
+    ));
+    let client: Client = client_node.action_client("/compute").unwrap();
+    assert!(
+        client_node
+            .wait_for_action_server("/compute", PATIENCE)
+            .await,
+        "action server never discovered"
+    );
+    let (goal_id, response) =
+        tokio::time::timeout(PATIENCE, client.async_send_goal(goal(100.0, iterations)))
+            .await
+            .expect("goal answered in time")
+            .expect("goal sent");
+    assert!(response.accepted);
+    let feedback = client.feedback_stream(goal_id);
+    let mut feedback = std::pin::pin!(feedback);
+    tokio::time::timeout(PATIENCE, feedback.next())
+        .await
+        .expect("the goal runs");
+    let t0 = std::time::Instant::now();
+    shutdown.trigger();
+    tokio::time::timeout(PATIENCE, serving)
+        .await
+        .expect("the server returns on shutdown")
+        .expect("task")
+        .expect("served without error");
+    t0.elapsed()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn shutdown_cancels_a_running_computation_and_leaves_one_that_ignores_it() {
+    // A computation that checks its cancel ends through it, well inside the grace.
+    let cooperative = shutdown_while_running(domain(3), Counter, 100_000).await;
+    assert!(
+        cooperative < goal_server::SHUTDOWN_GRACE,
+        "a cancelled computation ended in {cooperative:?}"
+    );
+    // One that never checks (300 × 100 ms) is left after the grace instead of holding the node.
+    let stubborn = shutdown_while_running(domain(4), Stubborn, 300).await;
+    assert!(
+        stubborn >= goal_server::SHUTDOWN_GRACE && stubborn < Duration::from_secs(15),
+        "a stuck computation held shutdown for {stubborn:?}"
+    );
+}

@@ -365,8 +365,17 @@ type RunClient = ActionClient<ExecuteProgramGoal, ExecuteProgramResult, ExecuteP
 type SheetClient = ActionClient<SequenceSheetGoal, SequenceSheetResult, SequenceSheetFeedback>;
 type SliceClient = ActionClient<SliceGoal, SliceResult, SliceFeedback>;
 
+/// How often a result request is asked again while a goal runs: a reply the server sent before
+/// it had matched our new reply reader is lost (ROS 2 services are volatile), and asking again
+/// is safe (see [`request_result`]).
+const RESULT_RETRY: Duration = Duration::from_secs(10);
+
+/// How often a goal that is still running is reported, with its last feedback, so a stage that
+/// hangs names itself in the log long before the stage's timeout.
+const STILL_RUNNING_EVERY: Duration = Duration::from_secs(30);
+
 /// Sends a goal and waits for its result, logging feedback through `describe` at most once a
-/// second.
+/// second, and every [`STILL_RUNNING_EVERY`] that it still runs.
 async fn follow<G, R, F>(
     client: &ActionClient<G, R, F>,
     goal: G,
@@ -386,24 +395,43 @@ where
     if !response.accepted {
         bail!("{what}: the goal was rejected (ROS 2 rejections carry no reason: the serving node logs it)");
     }
+    let accepted = Instant::now();
     let feedback = client.feedback_stream(goal_id);
     let mut feedback = std::pin::pin!(feedback);
-    // One request held open for the whole goal (see `request_result`).
-    let result = request_result(client, goal_id, timeout, timeout);
+    let result = request_result(client, goal_id, RESULT_RETRY, timeout);
     let mut result = std::pin::pin!(result);
     let mut last_log = Instant::now() - Duration::from_secs(10);
+    let mut last_feedback: Option<String> = None;
+    let mut still_running = tokio::time::interval_at(
+        tokio::time::Instant::now() + STILL_RUNNING_EVERY,
+        STILL_RUNNING_EVERY,
+    );
     let mut open = true;
     loop {
         tokio::select! {
-            r = &mut result => return r.with_context(|| what.to_owned()),
+            r = &mut result => {
+                return r.map_err(|e| match &last_feedback {
+                    Some(f) => e.context(format!("{what} (last feedback: {f})")),
+                    None => e.context(format!("{what} (accepted, no feedback)")),
+                });
+            }
             f = feedback.next(), if open => match f {
-                Some(Ok(f)) if last_log.elapsed() >= Duration::from_secs(1) => {
-                    last_log = Instant::now();
-                    tracing::info!("{what}: {}", describe(&f));
+                Some(Ok(f)) => {
+                    let text = describe(&f);
+                    if last_log.elapsed() >= Duration::from_secs(1) {
+                        last_log = Instant::now();
+                        tracing::info!("{what}: {text}");
+                    }
+                    last_feedback = Some(text);
                 }
                 Some(_) => {}
                 None => open = false,
             },
+            _ = still_running.tick() => tracing::info!(
+                "{what}: still running {:.0} s after it was accepted (last feedback: {})",
+                accepted.elapsed().as_secs_f64(),
+                last_feedback.as_deref().unwrap_or("none"),
+            ),
         }
     }
 }
@@ -416,6 +444,17 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     let timeout = Duration::from_secs_f64(p.timeout_s.max(1.0));
     let plan_client: PlanClient = node.action_client("plan_hotwire")?;
     let run_client: RunClient = node.action_client("execute_program")?;
+    // Every stage's client now, not when its stage comes: the servers then discover our reply
+    // readers while the earlier stages run, instead of racing the first goal.
+    let sheet_client: Option<SheetClient> = (!p.sheet_job_id.is_empty())
+        .then(|| node.action_client("sequence_sheet"))
+        .transpose()?;
+    let waam_client: Option<SliceClient> = (!p.waam_job_id.is_empty())
+        .then(|| node.action_client("slice"))
+        .transpose()?;
+    let wing_client: Option<SliceClient> = (!p.wing_job_id.is_empty())
+        .then(|| node.action_client(&p.wing_action))
+        .transpose()?;
     let mut programs = node.subscriber::<MachineProgram>(&p.program_topic, QosPreset::Plan)?;
     for action in ["plan_hotwire", "execute_program"] {
         require_action_server(node, action, timeout).await?;
@@ -462,20 +501,19 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     let t1 = Instant::now();
     let run = execute(&run_client, &program, &p.machine_id, timeout).await?;
     let run_time = t1.elapsed();
-    let sheet = if p.sheet_job_id.is_empty() {
-        None
-    } else {
-        Some(run_sheet(node, p, &mut programs, &run_client, timeout).await?)
+    let sheet = match &sheet_client {
+        Some(client) => {
+            Some(run_sheet(node, p, client, &mut programs, &run_client, timeout).await?)
+        }
+        None => None,
     };
-    let waam = if p.waam_job_id.is_empty() {
-        None
-    } else {
-        Some(run_waam(node, p, &mut programs, &run_client, timeout).await?)
+    let waam = match &waam_client {
+        Some(client) => Some(run_waam(node, p, client, &mut programs, &run_client, timeout).await?),
+        None => None,
     };
-    let wing = if p.wing_job_id.is_empty() {
-        None
-    } else {
-        Some(run_wing(node, p, &mut programs, &run_client, timeout).await?)
+    let wing = match &wing_client {
+        Some(client) => Some(run_wing(node, p, client, &mut programs, &run_client, timeout).await?),
+        None => None,
     };
     Ok(JobSummary {
         iterations: last_iteration.load(std::sync::atomic::Ordering::Relaxed),
@@ -564,11 +602,11 @@ async fn require_action_server(
 async fn run_sheet(
     node: &CellNode,
     p: &RunnerParams,
+    client: &SheetClient,
     programs: &mut cell_runtime::Subscriber<MachineProgram>,
     run_client: &RunClient,
     timeout: Duration,
 ) -> anyhow::Result<SheetSummary> {
-    let client: SheetClient = node.action_client("sequence_sheet")?;
     require_action_server(node, "sequence_sheet", timeout).await?;
     let (layout_file, layout_json) = match EMBEDDED_SHEETS
         .iter()
@@ -589,7 +627,7 @@ async fn run_sheet(
     };
     tracing::info!("sequencing {} ({})", p.sheet_job_id, p.sheet_layout);
     let t0 = Instant::now();
-    let (status, sequence) = follow(&client, goal, "sequence_sheet", timeout, |f| {
+    let (status, sequence) = follow(client, goal, "sequence_sheet", timeout, |f| {
         format!(
             "{}: iteration {}, best cost {:.1}, idle {:.0} mm, {} overheats",
             f.phase, f.iteration, f.best_cost, f.best_idle_length_mm, f.best_overheats
@@ -617,11 +655,11 @@ async fn run_sheet(
 async fn run_waam(
     node: &CellNode,
     p: &RunnerParams,
+    client: &SliceClient,
     programs: &mut cell_runtime::Subscriber<MachineProgram>,
     run_client: &RunClient,
     timeout: Duration,
 ) -> anyhow::Result<WaamSummary> {
-    let client: SliceClient = node.action_client("slice")?;
     require_action_server(node, "slice", timeout).await?;
     // The slicer reads a path; the demo's nodes share this host. The embedded part's copy is
     // removed once the slicer has answered.
@@ -654,7 +692,7 @@ async fn run_waam(
     };
     tracing::info!("slicing {} ({})", p.waam_job_id, p.waam_part);
     let t0 = Instant::now();
-    let followed = follow(&client, goal, "slice", timeout, |f| {
+    let followed = follow(client, goal, "slice", timeout, |f| {
         format!("{}: layer {}/{}", f.phase, f.layers_done, f.layers_total)
     })
     .await;
@@ -717,11 +755,11 @@ fn write_embedded_wing(
 async fn run_wing(
     node: &CellNode,
     p: &RunnerParams,
+    client: &SliceClient,
     programs: &mut cell_runtime::Subscriber<MachineProgram>,
     run_client: &RunClient,
     timeout: Duration,
 ) -> anyhow::Result<WingSummary> {
-    let client: SliceClient = node.action_client(&p.wing_action)?;
     require_action_server(node, &p.wing_action, timeout).await?;
     let dir = if p.part_dir.is_empty() {
         std::env::temp_dir()
@@ -745,7 +783,7 @@ async fn run_wing(
         p.wing_section
     );
     let t0 = Instant::now();
-    let followed = follow(&client, goal, &p.wing_action, timeout, |f| {
+    let followed = follow(client, goal, &p.wing_action, timeout, |f| {
         format!("{}: layer {}/{}", f.phase, f.layers_done, f.layers_total)
     })
     .await;

@@ -911,6 +911,8 @@ where
   timeout_instant: Instant,
   // The original sample, returned to the caller on WouldBlock.
   sample: Option<D>,
+  // cellsuite: whether a timer will wake this future at `timeout_instant` (see vendor/README.md).
+  timer_armed: bool,
 }
 
 // This is required, because AsyncWrite contains "D".
@@ -955,6 +957,17 @@ where
       Err((write_options, ddsdata)) => {
         if Instant::now() < self.timeout_instant {
           self.pending = Some((write_options, ddsdata));
+          // cellsuite: only room in the window woke this future, so a window that never
+          // frees up (a reader that never acknowledges) parked the write forever and the
+          // timeout above was never checked. A one-shot timer thread wakes it at the timeout.
+          if !self.timer_armed {
+            self.timer_armed = true;
+            let (waker, at) = (cx.waker().clone(), self.timeout_instant);
+            std::thread::spawn(move || {
+              std::thread::sleep(at.saturating_duration_since(Instant::now()));
+              waker.wake();
+            });
+          }
           Poll::Pending
         } else {
           Poll::Ready(Err(WriteError::WouldBlock {
@@ -1052,6 +1065,7 @@ where
           .map(|t| t.to_std())
           .unwrap_or(crate::dds::helpers::TIMEOUT_FALLBACK.to_std()),
       sample: Some(data),
+      timer_armed: false, // cellsuite
     };
     write_future.await
   }
