@@ -143,6 +143,13 @@ fn demo_plans_emits_and_streams_a_wing_to_the_grbl_simulator() {
         "demo failed\nstdout:\n{stdout}\nstderr:\n{stderr}{}",
         launch_diagnosis(&stderr)
     );
+    // Every node removes its DDS endpoints at exit (rustdds patch 7: they used to overflow the
+    // removal queue, 15 error lines a run).
+    let unremoved: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("Cannot remove"))
+        .collect();
+    assert!(unremoved.is_empty(), "{unremoved:#?}");
     // 60 iterations for each of the panel's two sections, root and tip.
     assert!(stdout.contains("| plan    | 120 iterations"), "{stdout}");
     // The demo says its plan is cut short of the paper's.

@@ -1368,11 +1368,13 @@ impl DomainParticipantInner {
     // Adding readers. Capacities match the previous mio-extras channels.
     let (sender_add_reader, receiver_add_reader) =
       wake_channel::<ReaderIngredients>(100, &dp_waker);
-    let (sender_remove_reader, receiver_remove_reader) = wake_channel::<GUID>(4, &dp_waker);
+    // cellsuite: 256, was 4 (see vendor/README.md): a node dropping its endpoints at once
+    // filled the queue within its 20 ms and left them in the event loop.
+    let (sender_remove_reader, receiver_remove_reader) = wake_channel::<GUID>(256, &dp_waker);
 
     // Writers
     let (add_writer_sender, add_writer_receiver) = wake_channel::<WriterIngredients>(10, &dp_waker);
-    let (remove_writer_sender, remove_writer_receiver) = wake_channel::<GUID>(4, &dp_waker);
+    let (remove_writer_sender, remove_writer_receiver) = wake_channel::<GUID>(256, &dp_waker); // cellsuite: was 4
     let (reader_ready, reader_ready_rx) = ready_channel(&dp_waker);
     let (writer_ready, writer_ready_rx) = ready_channel(&dp_waker);
 
