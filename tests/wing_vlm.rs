@@ -38,16 +38,6 @@ mod common;
 
 const CELL: &str = env!("CARGO_BIN_EXE_cell");
 
-/// The six design cases of Table 1, one spec each.
-const SPECS: [&str; 6] = [
-    "direct-washout",
-    "gwing-table2",
-    "single-point-inverse-chord",
-    "two-point-lift",
-    "two-point-cl",
-    "two-point-lift-cl",
-];
-
 fn repo(path: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join(path)
@@ -179,7 +169,9 @@ fn lifting_line_agrees_with_the_vortex_lattice_for_all_six_design_cases() {
         )
     };
     let table: Vec<String> = std::thread::scope(|s| {
-        let threads: Vec<_> = SPECS.map(|name| s.spawn(move || case(name))).into();
+        let threads: Vec<_> = cell_wing::design::EXAMPLE_SPECS
+            .map(|(name, _)| s.spawn(move || case(name)))
+            .into();
         threads
             .into_iter()
             .map(|t| t.join().expect("a case failed (its message is above)"))

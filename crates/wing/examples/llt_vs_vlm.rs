@@ -16,15 +16,6 @@ use cell_wing::crosscheck::{pct, Agreement, VlmSolution};
 use cell_wing::llt::LiftingLine;
 use cell_wing::spec::{Wing, WingSpec};
 
-const SPECS: [&str; 6] = [
-    "direct-washout",
-    "gwing-table2",
-    "single-point-inverse-chord",
-    "two-point-lift",
-    "two-point-cl",
-    "two-point-lift-cl",
-];
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
     let args: Vec<usize> = std::env::args()
@@ -62,7 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "e LLT/VLM",
         "s"
     );
-    for name in SPECS {
+    for (name, _) in cell_wing::design::EXAMPLE_SPECS {
         let spec = WingSpec::load(format!("{root}/config/wings/{name}.yaml"))?;
         let wing = Wing::design(spec)?;
         let a = &wing.spec.aero;

@@ -23,6 +23,17 @@ use serde::{Deserialize, Serialize};
 
 use crate::llt::{LiftingLine, LltError, Solution};
 
+/// The example specs shipped under `config/wings/` (`<name>.yaml`), one per design case of
+/// seed 002 Table 1: (file stem, [`Design::case`]). Tests and the VLM comparison walk this list.
+pub const EXAMPLE_SPECS: [(&str, &str); 6] = [
+    ("direct-washout", "direct"),
+    ("gwing-table2", "inverse_twist"),
+    ("single-point-inverse-chord", "inverse_chord"),
+    ("two-point-lift", "two_lift"),
+    ("two-point-cl", "two_cl"),
+    ("two-point-lift-cl", "lift_and_cl"),
+];
+
 /// A chord distribution shape (scaled to the aspect ratio).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "snake_case")]

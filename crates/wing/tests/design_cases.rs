@@ -229,16 +229,9 @@ fn check(name: &str) -> (String, Vec<f64>) {
 
 #[test]
 fn every_example_spec_meets_its_targets() {
-    let cases = [
-        ("direct-washout.yaml", "direct"),
-        ("gwing-table2.yaml", "inverse_twist"),
-        ("single-point-inverse-chord.yaml", "inverse_chord"),
-        ("two-point-lift.yaml", "two_lift"),
-        ("two-point-cl.yaml", "two_cl"),
-        ("two-point-lift-cl.yaml", "lift_and_cl"),
-    ];
-    for (file, case) in cases {
-        let (got, _) = check(file);
+    for (name, case) in cell_wing::design::EXAMPLE_SPECS {
+        let file = format!("{name}.yaml");
+        let (got, _) = check(&file);
         assert_eq!(got, case, "{file}");
     }
 }
