@@ -558,17 +558,21 @@ fn a_node_dying_at_start_fails_the_launch_loudly() {
 fn ros_domain_id_separates_cells() {
     // A monitor on one domain never hears a probe on another; on the same domain it does.
     let (mine, other) = (common::fresh_domain(), common::fresh_domain());
-    let monitor = |domain: u16| {
+    // Waits that must pass are 8 s; one that should end early is 45 s (it ends as soon as it
+    // hears, and a loaded machine may take seconds to start a debug node and discover).
+    let monitor = |domain: u16, timeout_s: f64| {
         Command::new(env!("CARGO_BIN_EXE_cell"))
             .args(["node", "monitor", "--dds-network", "loopback", "--ros-args"])
-            .args(["-p", "expect_toolpaths:=1", "-p", "timeout_s:=8.0"])
+            .args(["-p", "expect_toolpaths:=1", "-p"])
+            .arg(format!("timeout_s:={timeout_s:.1}"))
             .env("ROS_DOMAIN_ID", domain.to_string())
             .stderr(std::process::Stdio::piped())
             .stdout(std::process::Stdio::piped())
             .spawn()
             .unwrap()
     };
-    let probe = |domain: u16| {
+    let probe = |domain: u16, timeout_s: f64| {
+        let wait = format!("wait_timeout_s:={timeout_s:.1}");
         cell(
             &[
                 "node",
@@ -581,13 +585,13 @@ fn ros_domain_id_separates_cells() {
                 "-p",
                 "wait_for_subscribers:=1",
                 "-p",
-                "wait_timeout_s:=8.0",
+                &wait,
             ],
             domain,
         )
     };
-    let elsewhere = monitor(other);
-    let lonely = probe(mine);
+    let elsewhere = monitor(other, 8.0);
+    let lonely = probe(mine, 8.0);
     assert_eq!(
         lonely.status.code(),
         Some(1),
@@ -606,9 +610,9 @@ fn ros_domain_id_separates_cells() {
         text(&out.stdout)
     );
 
-    let listening = monitor(mine);
+    let listening = monitor(mine, 45.0);
     std::thread::sleep(std::time::Duration::from_millis(300));
-    let _ = probe(mine);
+    let _ = probe(mine, 45.0);
     let out = listening.wait_with_output().unwrap();
     assert!(
         out.status.success(),
