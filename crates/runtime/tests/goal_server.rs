@@ -105,6 +105,39 @@ fn goal(chord: f64, iterations: u32) -> PlanHotwireGoal {
     }
 }
 
+/// A server of `handler` on `action` (node `server`) and a client that has discovered it, on
+/// `domain`.
+struct Served {
+    serving: tokio::task::JoinHandle<anyhow::Result<()>>,
+    shutdown: cell_runtime::Shutdown,
+    client: Client,
+    /// The client's node, kept for as long as the client.
+    _client_node: CellNode,
+}
+
+async fn serve_with_client<H: GoalHandler>(
+    domain: u16,
+    server: &str,
+    action: &'static str,
+    handler: H,
+    options: ServeOptions,
+) -> Served {
+    let (server_node, shutdown) = node(server, domain);
+    let (client_node, _) = node("operator", domain);
+    let serving = tokio::spawn(goal_server::serve(server_node, action, handler, options));
+    let client: Client = client_node.action_client(action).unwrap();
+    assert!(
+        client_node.wait_for_action_server(action, PATIENCE).await,
+        "action server {action} never discovered"
+    );
+    Served {
+        serving,
+        shutdown,
+        client,
+        _client_node: client_node,
+    }
+}
+
 /// Sends a goal to sleep `ms` milliseconds (in `iterations`) as job `job`; it must be accepted.
 async fn send_sleep(client: &Client, job: &str, ms: u32) -> cell_runtime::action::GoalId {
     let g = PlanHotwireGoal {
@@ -131,20 +164,15 @@ async fn result_of(
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn goals_are_checked_run_canceled_and_answered_late() {
-    let domain = domain(0);
-    let (server_node, shutdown) = node("counter", domain);
-    let (client_node, _) = node("operator", domain);
-    let serving = tokio::spawn(goal_server::serve(
-        server_node,
+    let served = serve_with_client(
+        domain(0),
+        "counter",
         "/count",
         Counter,
         ServeOptions::one_at_a_time(60.0),
-    ));
-    let client: Client = client_node.action_client("/count").unwrap();
-    assert!(
-        client_node.wait_for_action_server("/count", PATIENCE).await,
-        "action server never discovered"
-    );
+    )
+    .await;
+    let (client, shutdown) = (&served.client, &served.shutdown);
     let send = |g: PlanHotwireGoal| async {
         tokio::time::timeout(PATIENCE, client.async_send_goal(g))
             .await
@@ -167,7 +195,7 @@ async fn goals_are_checked_run_canceled_and_answered_late() {
         .expect("stream")
         .expect("feedback");
     assert_eq!(first.total_iterations, 5, "{first:?}");
-    let (status, result) = result_of(&client, goal_id).await;
+    let (status, result) = result_of(client, goal_id).await;
     assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
     assert_eq!(
         result.message, "count-2: 5 of 5",
@@ -178,7 +206,7 @@ async fn goals_are_checked_run_canceled_and_answered_late() {
     let (goal_id, response) = send(goal(100.0, 1)).await;
     assert!(response.accepted);
     tokio::time::sleep(Duration::from_secs(2)).await;
-    let (status, result) = result_of(&client, goal_id).await;
+    let (status, result) = result_of(client, goal_id).await;
     assert_eq!(status, GoalStatusEnum::Succeeded, "{}", result.message);
     assert_eq!(result.message, "count-3: 1 of 1");
 
@@ -191,22 +219,27 @@ async fn goals_are_checked_run_canceled_and_answered_late() {
         .await
         .expect("feedback in time");
     client.cancel_goal(goal_id).expect("cancel sent");
-    let (status, result) = result_of(&client, goal_id).await;
+    let (status, result) = result_of(client, goal_id).await;
     assert_eq!(status, GoalStatusEnum::Canceled, "{}", result.message);
     assert!(!result.success, "{}", result.message);
 
     // The node shutting down ends the server.
     shutdown.trigger();
-    tokio::time::timeout(PATIENCE, serving)
+    tokio::time::timeout(PATIENCE, served.serving)
         .await
         .expect("the server returns on shutdown")
         .expect("task")
         .expect("served without error");
 }
 
-/// Waits the goal's `iterations` milliseconds, awaiting rather than blocking (as a machine run
-/// does), or until it is canceled.
-struct Sleeper;
+/// Waits the goal's `iterations` milliseconds: [`Sleeper::Awaits`] awaiting rather than
+/// blocking (as a machine run does), or until it is canceled; [`Sleeper::Stuck`] on a blocking
+/// thread that never looks at its cancel (a computation stuck where it cannot be asked to stop).
+#[derive(Clone, Copy)]
+enum Sleeper {
+    Awaits,
+    Stuck,
+}
 
 impl GoalHandler for Sleeper {
     type Goal = PlanHotwireGoal;
@@ -232,6 +265,11 @@ impl GoalHandler for Sleeper {
             message: format!("{}: {message}", ctx.job_id()),
             ..Default::default()
         };
+        if matches!(self, Sleeper::Stuck) {
+            ctx.run_blocking(move |_| std::thread::sleep(Duration::from_millis(ms)))
+                .await?;
+            return Ok(GoalEnd::succeeded(result("slept through")));
+        }
         Ok(tokio::select! {
             _ = tokio::time::sleep(Duration::from_millis(ms)) => GoalEnd::succeeded(result("slept")),
             _ = ctx.canceled() => GoalEnd::canceled(result("woken")),
@@ -241,18 +279,15 @@ impl GoalHandler for Sleeper {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn concurrent_goals_run_side_by_side_and_cancel_alone() {
-    let domain = domain(1);
-    let (server_node, _) = node("sleeper", domain);
-    let (client_node, _) = node("operator", domain);
-    let serving = tokio::spawn(goal_server::serve(
-        server_node,
+    let served = serve_with_client(
+        domain(1),
+        "sleeper",
         "/sleep",
-        Sleeper,
+        Sleeper::Awaits,
         ServeOptions::concurrent(60.0),
-    ));
-    let client: Client = client_node.action_client("/sleep").unwrap();
-    assert!(client_node.wait_for_action_server("/sleep", PATIENCE).await);
-    let client = &client;
+    )
+    .await;
+    let (serving, client) = (&served.serving, &served.client);
     let long = send_sleep(client, "long", 600_000).await;
     // Accepted and run while the long one still runs.
     let short = send_sleep(client, "short", 100).await;
@@ -303,19 +338,16 @@ async fn answers(
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_result_request_is_answered_and_the_end_status_is_published_without_one() {
-    let domain = domain(2);
-    let (server_node, _) = node("sleeper", domain);
-    let (client_node, _) = node("operator", domain);
     let result_timeout = Duration::from_secs(4);
-    let serving = tokio::spawn(goal_server::serve(
-        server_node,
+    let served = serve_with_client(
+        domain(2),
+        "sleeper",
         "/sleep",
-        Sleeper,
+        Sleeper::Awaits,
         ServeOptions::one_at_a_time(result_timeout.as_secs_f64()),
-    ));
-    let client: Client = client_node.action_client("/sleep").unwrap();
-    assert!(client_node.wait_for_action_server("/sleep", PATIENCE).await);
-    let client = &client;
+    )
+    .await;
+    let (serving, client) = (&served.serving, &served.client);
     let ask = |goal| client.request_result(goal).expect("result requested");
 
     // Asked twice while the goal runs (a client retrying), and once after it ended: every
@@ -371,36 +403,6 @@ async fn every_result_request_is_answered_and_the_end_status_is_published_withou
     serving.abort();
 }
 
-/// Sleeps `iterations` × 100 ms on a blocking thread and never looks at its cancel: a
-/// computation stuck where it cannot be asked to stop.
-struct Stubborn;
-
-impl GoalHandler for Stubborn {
-    type Goal = PlanHotwireGoal;
-    type Result = PlanHotwireResult;
-    type Feedback = PlanHotwireFeedback;
-    type Job = u64;
-
-    fn job_id(&self, goal: &PlanHotwireGoal, _served: u64) -> String {
-        goal.job_id.clone()
-    }
-
-    fn validate(&self, goal: &PlanHotwireGoal, _job_id: &str) -> Result<u64, String> {
-        Ok(u64::from(goal.iterations))
-    }
-
-    async fn run(
-        &self,
-        steps: u64,
-        ctx: GoalContext<PlanHotwireFeedback>,
-    ) -> anyhow::Result<GoalEnd<PlanHotwireResult>> {
-        ctx.feedback(PlanHotwireFeedback::default());
-        ctx.run_blocking(move |_| std::thread::sleep(Duration::from_millis(100 * steps)))
-            .await?;
-        Ok(GoalEnd::succeeded(PlanHotwireResult::default()))
-    }
-}
-
 /// Shuts a server of `handler` down while a goal of `iterations` runs; how long `serve` took to
 /// return.
 async fn shutdown_while_running<H: GoalHandler>(
@@ -408,21 +410,15 @@ async fn shutdown_while_running<H: GoalHandler>(
     handler: H,
     iterations: u32,
 ) -> Duration {
-    let (server_node, shutdown) = node("computer", domain);
-    let (client_node, _) = node("operator", domain);
-    let serving = tokio::spawn(goal_server::serve(
-        server_node,
+    let served = serve_with_client(
+        domain,
+        "computer",
         "/compute",
         handler,
         ServeOptions::one_at_a_time(60.0),
-    ));
-    let client: Client = client_node.action_client("/compute").unwrap();
-    assert!(
-        client_node
-            .wait_for_action_server("/compute", PATIENCE)
-            .await,
-        "action server never discovered"
-    );
+    )
+    .await;
+    let (client, shutdown) = (&served.client, &served.shutdown);
     let (goal_id, response) =
         tokio::time::timeout(PATIENCE, client.async_send_goal(goal(100.0, iterations)))
             .await
@@ -436,7 +432,7 @@ async fn shutdown_while_running<H: GoalHandler>(
         .expect("the goal runs");
     let t0 = std::time::Instant::now();
     shutdown.trigger();
-    tokio::time::timeout(PATIENCE, serving)
+    tokio::time::timeout(PATIENCE, served.serving)
         .await
         .expect("the server returns on shutdown")
         .expect("task")
@@ -452,10 +448,10 @@ async fn shutdown_cancels_a_running_computation_and_leaves_one_that_ignores_it()
         cooperative < goal_server::SHUTDOWN_GRACE,
         "a cancelled computation ended in {cooperative:?}"
     );
-    // One that never checks (300 × 100 ms) is left after the grace instead of holding the node.
-    let stubborn = shutdown_while_running(domain(4), Stubborn, 300).await;
+    // One that never checks (a 12 s sleep) is left after the grace instead of holding the node.
+    let stubborn = shutdown_while_running(domain(4), Sleeper::Stuck, 12_000).await;
     assert!(
-        stubborn >= goal_server::SHUTDOWN_GRACE && stubborn < Duration::from_secs(15),
+        stubborn >= goal_server::SHUTDOWN_GRACE && stubborn < Duration::from_secs(8),
         "a stuck computation held shutdown for {stubborn:?}"
     );
 }
