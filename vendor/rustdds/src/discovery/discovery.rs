@@ -1845,10 +1845,17 @@ impl Discovery {
 
     // Send the ReaderUpdated notification on any existing readers on the writer's
     // topic This will result in matching the endpoints if possible
-    let existing_readers = db.readers_on_topic(writer_data.publication_topic_data.topic_name());
+    // cellsuite: collected, then sent with the lock released (see vendor/README.md): the
+    // send blocks on a full queue whose reader, the event loop, may be waiting for this lock.
+    let existing_readers: Vec<DiscoveredReaderData> = db
+      .readers_on_topic(writer_data.publication_topic_data.topic_name())
+      .into_iter()
+      .cloned()
+      .collect();
+    drop(db);
     for reader in existing_readers {
       self.send_discovery_notification(DiscoveryNotificationType::ReaderUpdated {
-        discovered_reader_data: reader.clone(),
+        discovered_reader_data: reader,
       });
     }
   }
@@ -1869,10 +1876,16 @@ impl Discovery {
 
     // Send the WriterUpdated notification on any existing writers on the readers's
     // topic This will result in matching the endpoints if possible
-    let existing_writers = db.writers_on_topic(reader_data.subscription_topic_data.topic_name());
+    // cellsuite: collected, then sent with the lock released (as in add_local_writer).
+    let existing_writers: Vec<DiscoveredWriterData> = db
+      .writers_on_topic(reader_data.subscription_topic_data.topic_name())
+      .into_iter()
+      .cloned()
+      .collect();
+    drop(db);
     for writer in existing_writers {
       self.send_discovery_notification(DiscoveryNotificationType::WriterUpdated {
-        discovered_writer_data: writer.clone(),
+        discovered_writer_data: writer,
       });
     }
   }
