@@ -177,32 +177,18 @@ pub struct JobSummary {
     /// The sheet job, if one was run.
     pub sheet: Option<SheetSummary>,
     /// The WAAM job, if one was run.
-    pub waam: Option<WaamSummary>,
+    pub waam: Option<SliceJobSummary>,
     /// The G-Wing job, if one was run.
-    pub wing: Option<WingSummary>,
+    pub wing: Option<SliceJobSummary>,
 }
 
-/// What the G-Wing job's stages gave, for the summary.
+/// What a slice job's stages gave, for the summary: the WAAM part or the G-Wing section (whose
+/// `report_json` is `cell_slicer::wing::WingReport`).
 #[derive(Debug, Clone, Default)]
-pub struct WingSummary {
-    /// The slicer's result (its `report_json` is `cell_slicer::wing::WingReport`).
-    pub slice: SliceResult,
-    /// Design and slicing time.
-    pub slice_time: Duration,
-    /// The program.
-    pub program: MachineProgram,
-    /// The run's result.
-    pub run: ExecuteProgramResult,
-    /// Running time.
-    pub run_time: Duration,
-}
-
-/// What the WAAM job's stages gave, for the summary.
-#[derive(Debug, Clone, Default)]
-pub struct WaamSummary {
+pub struct SliceJobSummary {
     /// The slicer's result.
     pub slice: SliceResult,
-    /// Slicing time.
+    /// Slicing time (for a wing, design and slicing).
     pub slice_time: Duration,
     /// The program.
     pub program: MachineProgram,
@@ -497,10 +483,14 @@ pub async fn run_job(node: &CellNode, p: &RunnerParams) -> anyhow::Result<JobSum
     let plan_time = t0.elapsed();
     tracing::info!("{}", plan.message);
 
-    let program = wait_for_program(&mut programs, p, &p.job_id, timeout).await?;
-    let t1 = Instant::now();
-    let run = execute(&run_client, &program, &p.machine_id, timeout).await?;
-    let run_time = t1.elapsed();
+    let (program, run, run_time) = program_and_run(
+        &mut programs,
+        p,
+        (&p.job_id, &p.machine_id),
+        &run_client,
+        timeout,
+    )
+    .await?;
     let sheet = match &sheet_client {
         Some(client) => {
             Some(run_sheet(node, p, client, &mut programs, &run_client, timeout).await?)
@@ -639,15 +629,14 @@ async fn run_sheet(
     }
     let sequence_time = t0.elapsed();
     tracing::info!("{}", sequence.message);
-    let program = wait_for_program(programs, p, &p.sheet_job_id, timeout).await?;
-    let t1 = Instant::now();
-    let run = execute(run_client, &program, "", timeout).await?;
+    let (program, run, run_time) =
+        program_and_run(programs, p, (&p.sheet_job_id, ""), run_client, timeout).await?;
     Ok(SheetSummary {
         sequence,
         sequence_time,
         program,
         run,
-        run_time: t1.elapsed(),
+        run_time,
     })
 }
 
@@ -659,7 +648,7 @@ async fn run_waam(
     programs: &mut cell_runtime::Subscriber<MachineProgram>,
     run_client: &RunClient,
     timeout: Duration,
-) -> anyhow::Result<WaamSummary> {
+) -> anyhow::Result<SliceJobSummary> {
     require_action_server(node, "slice", timeout).await?;
     // The slicer reads a path; the demo's nodes share this host. The embedded part's copy is
     // removed once the slicer has answered.
@@ -699,22 +688,51 @@ async fn run_waam(
     if let Some(path) = written {
         let _ = std::fs::remove_file(path);
     }
-    let (status, slice) = followed?;
-    if status != GoalStatusEnum::Succeeded || !slice.success {
-        bail!("slice: {}", slice.message);
-    }
+    let slice = slice_verdict(followed, "slice")?;
     let slice_time = t0.elapsed();
-    tracing::info!("{}", slice.message);
-    let program = wait_for_program(programs, p, &p.waam_job_id, timeout).await?;
-    let t1 = Instant::now();
-    let run = execute(run_client, &program, &p.waam_machine_id, timeout).await?;
-    Ok(WaamSummary {
+    let (program, run, run_time) = program_and_run(
+        programs,
+        p,
+        (&p.waam_job_id, &p.waam_machine_id),
+        run_client,
+        timeout,
+    )
+    .await?;
+    Ok(SliceJobSummary {
         slice,
         slice_time,
         program,
         run,
-        run_time: t1.elapsed(),
+        run_time,
     })
+}
+
+/// The slicer's answer to a slice goal, or why the job stops there.
+fn slice_verdict(
+    followed: anyhow::Result<(GoalStatusEnum, SliceResult)>,
+    action: &str,
+) -> anyhow::Result<SliceResult> {
+    let (status, slice) = followed?;
+    if status != GoalStatusEnum::Succeeded || !slice.success {
+        bail!("{action}: {}", slice.message);
+    }
+    tracing::info!("{}", slice.message);
+    Ok(slice)
+}
+
+/// A stage's program, once the emitter has published it, run to its end on `machine_id`:
+/// the program, the run's result and its running time.
+async fn program_and_run(
+    programs: &mut cell_runtime::Subscriber<MachineProgram>,
+    p: &RunnerParams,
+    (job_id, machine_id): (&str, &str),
+    run_client: &RunClient,
+    timeout: Duration,
+) -> anyhow::Result<(MachineProgram, ExecuteProgramResult, Duration)> {
+    let program = wait_for_program(programs, p, job_id, timeout).await?;
+    let t0 = Instant::now();
+    let run = execute(run_client, &program, machine_id, timeout).await?;
+    Ok((program, run, t0.elapsed()))
 }
 
 /// Writes an embedded wing spec and its airfoil into `dir` (the airfoil next to the spec, as
@@ -759,7 +777,7 @@ async fn run_wing(
     programs: &mut cell_runtime::Subscriber<MachineProgram>,
     run_client: &RunClient,
     timeout: Duration,
-) -> anyhow::Result<WingSummary> {
+) -> anyhow::Result<SliceJobSummary> {
     require_action_server(node, &p.wing_action, timeout).await?;
     let dir = if p.part_dir.is_empty() {
         std::env::temp_dir()
@@ -803,21 +821,22 @@ async fn run_wing(
             let _ = std::fs::remove_file(a);
         }
     }
-    let (status, slice) = followed?;
-    if status != GoalStatusEnum::Succeeded || !slice.success {
-        bail!("{}: {}", p.wing_action, slice.message);
-    }
+    let slice = slice_verdict(followed, &p.wing_action)?;
     let slice_time = t0.elapsed();
-    tracing::info!("{}", slice.message);
-    let program = wait_for_program(programs, p, &p.wing_job_id, timeout).await?;
-    let t1 = Instant::now();
-    let run = execute(run_client, &program, &p.wing_machine_id, timeout).await?;
-    Ok(WingSummary {
+    let (program, run, run_time) = program_and_run(
+        programs,
+        p,
+        (&p.wing_job_id, &p.wing_machine_id),
+        run_client,
+        timeout,
+    )
+    .await?;
+    Ok(SliceJobSummary {
         slice,
         slice_time,
         program,
         run,
-        run_time: t1.elapsed(),
+        run_time,
     })
 }
 
